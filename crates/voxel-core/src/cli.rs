@@ -1,0 +1,259 @@
+//! The headless `voxel-art voxelize` command: batch voxelization with stats and .vox export.
+
+use std::ffi::OsString;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Parser, ValueEnum};
+
+use crate::error::{Result, VoxelError};
+use crate::grid::GridSize;
+use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
+
+/// Interior mode on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum FillArg {
+    Parity,
+    Flood,
+    None,
+}
+
+/// Shell mode on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum ShellArg {
+    Auto,
+    All,
+    None,
+}
+
+/// Parity implementation on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum MethodArg {
+    Fast,
+    Bvh,
+    Reference,
+}
+
+/// Voxelize glTF/GLB models headless: stats (optionally JSON lines) and MagicaVoxel export.
+#[derive(Debug, Parser)]
+#[command(name = "voxel-art voxelize", bin_name = "voxel-art voxelize", version)]
+struct Args {
+    /// Model files (.glb/.gltf) or folders holding them.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
+    /// Cells along the longest axis of the model.
+    #[arg(long, short = 'r', conflicts_with = "grid_size")]
+    resolution: Option<u32>,
+    /// Cell width in model units (the model's diagonal is scaled to --model-size).
+    #[arg(long, short = 'g')]
+    grid_size: Option<f32>,
+    /// Length of the model's bounding-box diagonal after normalization.
+    #[arg(long, default_value_t = 9.0)]
+    model_size: f32,
+    /// Cell height as a multiple of the cell width (1.2 for Lego bricks).
+    #[arg(long, default_value_t = 1.0)]
+    cell_height: f32,
+    /// How the interior is found.
+    #[arg(long, value_enum, default_value = "parity")]
+    fill: FillArg,
+    /// Which surface cells join the solid.
+    #[arg(long, value_enum, default_value = "auto")]
+    shell: ShellArg,
+    /// Keep only voxels with an empty face neighbour.
+    #[arg(long)]
+    hollow: bool,
+    /// Apply the pastel colour remap.
+    #[arg(long)]
+    pastel: bool,
+    /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
+    #[arg(long, value_enum, default_value = "fast")]
+    method: MethodArg,
+    /// Write MagicaVoxel .vox: a file for one input, a folder (one <name>.vox each) for several.
+    #[arg(long, short = 'o')]
+    out: Option<PathBuf>,
+    /// Print one JSON object per line per file instead of a readable summary.
+    #[arg(long)]
+    json: bool,
+    /// Largest accepted grid in cells (memory guard).
+    #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
+    max_cells: u64,
+}
+
+impl Args {
+    fn options(&self) -> VoxelizeOptions {
+        VoxelizeOptions {
+            model_size: self.model_size,
+            grid: match (self.resolution, self.grid_size) {
+                (Some(r), _) => GridSize::Resolution(r),
+                (None, Some(g)) => GridSize::Cell(g),
+                (None, None) => GridSize::default(),
+            },
+            cell_height_ratio: self.cell_height,
+            fill: match self.fill {
+                FillArg::Parity => FillMode::Parity,
+                FillArg::Flood => FillMode::Flood,
+                FillArg::None => FillMode::None,
+            },
+            shell: match self.shell {
+                ShellArg::Auto => ShellMode::Auto,
+                ShellArg::All => ShellMode::All,
+                ShellArg::None => ShellMode::None,
+            },
+            hollow: self.hollow,
+            method: match self.method {
+                MethodArg::Fast => Method::Fast,
+                MethodArg::Bvh => Method::Bvh,
+                MethodArg::Reference => Method::Reference,
+            },
+            pastel: self.pastel,
+            max_cells: self.max_cells,
+        }
+    }
+}
+
+/// The JSON line printed per file.
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    file: &'a str,
+    triangles: usize,
+    grid: [u32; 3],
+    voxels: usize,
+    surface: usize,
+    visible: usize,
+    colors: usize,
+    output_voxels: usize,
+    load_ms: f64,
+    voxelize_ms: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    vox: Option<String>,
+}
+
+/// Whether a path names a glTF model.
+pub fn is_model_file(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
+}
+
+/// Expands folders into the model files they hold (sorted); files are kept as given.
+pub fn expand_inputs(inputs: &[PathBuf]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for input in inputs {
+        if input.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(input)
+                .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_model_file(p)).collect())
+                .unwrap_or_default();
+            found.sort();
+            out.extend(found);
+        } else {
+            out.push(input.clone());
+        }
+    }
+    out
+}
+
+fn vox_path(out: &Path, input: &Path, several: bool) -> PathBuf {
+    if several {
+        let stem = input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+        out.join(format!("{stem}.vox"))
+    } else {
+        out.to_owned()
+    }
+}
+
+fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -> Result<String> {
+    let t0 = Instant::now();
+    let soup = crate::import::load_file(file)?;
+    let load_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let t1 = Instant::now();
+    let model = voxelize(&soup, options)?;
+    let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
+    let vox = match &args.out {
+        Some(out) => {
+            if several {
+                std::fs::create_dir_all(out).map_err(|e| VoxelError::Export { path: out.clone(), reason: e.to_string() })?;
+            }
+            let path = vox_path(out, file, several);
+            crate::vox::write_vox(&model, &path)?;
+            Some(path.display().to_string())
+        }
+        None => None,
+    };
+    let s = model.stats;
+    let name = file.display().to_string();
+    if args.json {
+        let report = Report {
+            file: &name,
+            triangles: s.triangles,
+            grid: s.grid,
+            voxels: s.voxels,
+            surface: s.surface,
+            visible: s.visible,
+            colors: s.colors,
+            output_voxels: model.voxels.len(),
+            load_ms,
+            voxelize_ms,
+            vox,
+        };
+        serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
+    } else {
+        let [nx, ny, nz] = s.grid;
+        let written = vox.map(|p| format!(", wrote {p}")).unwrap_or_default();
+        Ok(format!(
+            "{name}: {} triangles -> {nx}x{ny}x{nz} grid, {} voxels ({} surface, {} visible, {} output), {} colours; load {load_ms:.1} ms, voxelize {voxelize_ms:.1} ms{written}",
+            s.triangles,
+            s.voxels,
+            s.surface,
+            s.visible,
+            model.voxels.len(),
+            s.colors
+        ))
+    }
+}
+
+/// Runs `voxel-art voxelize` with `args` (the first item is the program name). Returns the exit status:
+/// 0 when every file succeeded, 1 when any failed (after processing the others), 2 on bad usage.
+pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
+    let args = match Args::try_parse_from(args) {
+        Ok(a) => a,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let options = args.options();
+    let files = expand_inputs(&args.files);
+    if files.is_empty() {
+        eprintln!("error: no .glb or .gltf files found in the given folders");
+        return 1;
+    }
+    let several = files.len() > 1;
+    let progress = if several && std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(files.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let mut failed = false;
+    let stdout = std::io::stdout();
+    for file in &files {
+        progress.set_message(file.display().to_string());
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, &args, &options, several)));
+        match outcome {
+            Ok(Ok(line)) => {
+                progress.suspend(|| {
+                    let _ = writeln!(stdout.lock(), "{line}");
+                });
+            }
+            Ok(Err(e)) => {
+                failed = true;
+                progress.suspend(|| eprintln!("error: {}: {e}", file.display()));
+            }
+            Err(_) => {
+                failed = true;
+                progress.suspend(|| eprintln!("error: {}: internal error (panic); please report it", file.display()));
+            }
+        }
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+    i32::from(failed)
+}

@@ -1,0 +1,230 @@
+//! Exact and robust geometric predicates in grid space (f64): column coverage with a consistent
+//! tie-break, plane depth, triangle–box overlap and closest point on a triangle.
+
+use glam::DVec3;
+use robust::{Coord, orient2d};
+
+/// A triangle in grid coordinates: cell (i, j, k) spans [i, i+1] × [j, j+1] × [k, k+1].
+pub type GridTriangle = [DVec3; 3];
+
+/// Which side of the directed edge `u → v` the point `p` lies on, in the XY plane.
+///
+/// Exact (Shewchuk's adaptive `orient2d`). A point exactly on the edge line is decided as if it were moved
+/// by (ε, ε²) — the same symbolic perturbation for every edge and every point — so the projections of the
+/// triangles of a closed mesh cover every column exactly the right number of times: a shared edge or vertex
+/// is counted once, never twice or zero times. Antisymmetric: `edge_side(u, v, p) == !edge_side(v, u, p)`
+/// for `u != v`.
+#[inline]
+pub fn edge_side(u: DVec3, v: DVec3, p: [f64; 2]) -> bool {
+    let o = orient2d(Coord { x: u.x, y: u.y }, Coord { x: v.x, y: v.y }, Coord { x: p[0], y: p[1] });
+    if o != 0.0 {
+        return o > 0.0;
+    }
+    // orient2d(u, v, p + (ε, ε²)) = o + dx·ε² − dy·ε: the ε term decides, then the ε² term.
+    let (dx, dy) = (v.x - u.x, v.y - u.y);
+    if dy != 0.0 { dy < 0.0 } else { dx > 0.0 }
+}
+
+/// Whether the +Z column through `p` (x, y) crosses the triangle, with the consistent tie-break of
+/// [`edge_side`]. Triangles seen edge-on (zero projected area, decided exactly) never cover a column: under
+/// the perturbation they cover no point, so dropping them keeps the count consistent.
+#[inline]
+pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
+    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
+    if orient2d(xy(t[0]), xy(t[1]), xy(t[2])) == 0.0 {
+        return false;
+    }
+    let s0 = edge_side(t[0], t[1], p);
+    let s1 = edge_side(t[1], t[2], p);
+    let s2 = edge_side(t[2], t[0], p);
+    s0 == s1 && s1 == s2
+}
+
+/// The z where the triangle's plane meets the column through `p` (the triangle must cover the column).
+#[inline]
+pub fn depth_at(t: &GridTriangle, p: [f64; 2]) -> f64 {
+    let [a, b, c] = *t;
+    let w0 = (b.x - p[0]) * (c.y - p[1]) - (b.y - p[1]) * (c.x - p[0]);
+    let w1 = (c.x - p[0]) * (a.y - p[1]) - (c.y - p[1]) * (a.x - p[0]);
+    let w2 = (a.x - p[0]) * (b.y - p[1]) - (a.y - p[1]) * (b.x - p[0]);
+    let sum = w0 + w1 + w2;
+    if sum == 0.0 {
+        // Only reachable for slivers whose area vanishes in f64 but not exactly: use the centroid depth.
+        return (a.z + b.z + c.z) / 3.0;
+    }
+    let z = (w0 * a.z + w1 * b.z + w2 * c.z) / sum;
+    z.clamp(a.z.min(b.z).min(c.z), a.z.max(b.z).max(c.z))
+}
+
+/// Triangle–axis-aligned-box overlap (separating axis test of Akenine-Möller), box given by centre and
+/// half size. Touching counts as overlapping.
+pub fn triangle_box_overlap(center: DVec3, half: DVec3, t: &GridTriangle) -> bool {
+    let v0 = t[0] - center;
+    let v1 = t[1] - center;
+    let v2 = t[2] - center;
+    // The box's own axes.
+    for a in 0..3 {
+        let lo = v0[a].min(v1[a]).min(v2[a]);
+        let hi = v0[a].max(v1[a]).max(v2[a]);
+        if lo > half[a] || hi < -half[a] {
+            return false;
+        }
+    }
+    let e0 = v1 - v0;
+    let e1 = v2 - v1;
+    let e2 = v0 - v2;
+    // The nine edge × box-axis cross products, written out: for axis X and edge e the separating
+    // direction is (0, −e.z, e.y), and so on.
+    let separated = |p: [f64; 3], r: f64| p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r;
+    for e in [e0, e1, e2] {
+        let (ax, ay, az) = (e.x.abs(), e.y.abs(), e.z.abs());
+        let proj_x = [v0, v1, v2].map(|v| -e.z * v.y + e.y * v.z);
+        if separated(proj_x, half.y * az + half.z * ay) {
+            return false;
+        }
+        let proj_y = [v0, v1, v2].map(|v| e.z * v.x - e.x * v.z);
+        if separated(proj_y, half.x * az + half.z * ax) {
+            return false;
+        }
+        let proj_z = [v0, v1, v2].map(|v| -e.y * v.x + e.x * v.y);
+        if separated(proj_z, half.x * ay + half.y * ax) {
+            return false;
+        }
+    }
+    // The triangle's plane.
+    let n = e0.cross(e1);
+    let r = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
+    n.dot(v0).abs() <= r
+}
+
+/// The closest point of triangle `t` to `p`, as barycentric weights of its corners (Ericson, RTCD 5.1.5).
+pub fn closest_point_barycentric(p: DVec3, t: &GridTriangle) -> [f64; 3] {
+    let [a, b, c] = *t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0];
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return [1.0 - v, v, 0.0];
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return [1.0 - w, 0.0, w];
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - w, w];
+    }
+    let denom = va + vb + vc;
+    if denom == 0.0 || !denom.is_finite() {
+        // Degenerate triangle: fall back to the nearest corner.
+        let d = [a.distance_squared(p), b.distance_squared(p), c.distance_squared(p)];
+        let i = (0..3).min_by(|&i, &j| d[i].total_cmp(&d[j])).unwrap_or(0);
+        let mut w = [0.0; 3];
+        w[i] = 1.0;
+        return w;
+    }
+    let v = vb / denom;
+    let w = vc / denom;
+    [1.0 - v - w, v, w]
+}
+
+/// The point with barycentric weights `w` on `t`.
+pub fn point_at(t: &GridTriangle, w: [f64; 3]) -> DVec3 {
+    t[0] * w[0] + t[1] * w[1] + t[2] * w[2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> GridTriangle {
+        [DVec3::from(a), DVec3::from(b), DVec3::from(c)]
+    }
+
+    #[test]
+    fn shared_edge_is_owned_by_exactly_one_triangle() {
+        // A unit square split along its diagonal; sample points on the diagonal, the edges and corners.
+        let t1 = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
+        let t2 = tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
+        for p in [[0.5, 0.5], [0.25, 0.25], [0.0, 0.0], [1.0, 1.0], [0.5, 0.0], [0.7, 0.1], [0.1, 0.7]] {
+            let n = usize::from(covers_column(&t1, p)) + usize::from(covers_column(&t2, p));
+            assert!(n <= 1, "point {p:?} covered {n} times");
+        }
+        assert!(covers_column(&t1, [0.5, 0.5]) ^ covers_column(&t2, [0.5, 0.5]));
+    }
+
+    #[test]
+    fn a_vertex_shared_by_a_fan_is_covered_once() {
+        // Six triangles around the origin covering the plane near it.
+        let ring: Vec<DVec3> = (0..6)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::TAU / 6.0;
+                DVec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let count = (0..6)
+            .filter(|&k| covers_column(&[DVec3::ZERO, ring[k], ring[(k + 1) % 6]], [0.0, 0.0]))
+            .count();
+        assert_eq!(count, 1);
+        // Reversed winding everywhere gives the same count.
+        let count_rev = (0..6)
+            .filter(|&k| covers_column(&[DVec3::ZERO, ring[(k + 1) % 6], ring[k]], [0.0, 0.0]))
+            .count();
+        assert_eq!(count_rev, 1);
+    }
+
+    #[test]
+    fn edge_on_triangles_cover_nothing() {
+        let t = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.0, 1.0]);
+        assert!(!covers_column(&t, [0.5, 0.0]));
+        assert!(!covers_column(&t, [0.5, 0.1]));
+        // A vertical sliver whose corners all project onto one point covers nothing, anywhere.
+        let point = tri([2.0, 3.0, 0.0], [2.0, 3.0, 1.0], [2.0, 3.0, 5.0]);
+        assert!(!covers_column(&point, [2.0, 3.0]));
+        assert!(!covers_column(&point, [0.5, 0.5]));
+    }
+
+    #[test]
+    fn depth_interpolates_the_plane() {
+        let t = tri([0.0, 0.0, 1.0], [2.0, 0.0, 3.0], [0.0, 2.0, 1.0]);
+        assert!((depth_at(&t, [0.5, 0.5]) - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn box_overlap_catches_thin_slivers_and_rejects_near_misses() {
+        let c = DVec3::splat(0.5);
+        let h = DVec3::splat(0.5);
+        // A big triangle crossing the box diagonally although no corner is inside.
+        assert!(triangle_box_overlap(c, h, &tri([-5.0, -5.0, 0.5], [5.0, -5.0, 0.5], [0.0, 5.0, 0.5])));
+        // A plane just past the corner (1,1,1) along the diagonal misses.
+        let d = 3.0 + 1e-6;
+        assert!(!triangle_box_overlap(c, h, &tri([d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d])));
+        assert!(triangle_box_overlap(c, h, &tri([2.9, 0.0, 0.0], [0.0, 2.9, 0.0], [0.0, 0.0, 2.9])));
+    }
+
+    #[test]
+    fn closest_point_regions() {
+        let t = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        assert_eq!(closest_point_barycentric(DVec3::new(-1.0, -1.0, 0.0), &t), [1.0, 0.0, 0.0]);
+        let w = closest_point_barycentric(DVec3::new(0.25, 0.25, 3.0), &t);
+        assert!((point_at(&t, w) - DVec3::new(0.25, 0.25, 0.0)).length() < 1e-12);
+        let w = closest_point_barycentric(DVec3::new(0.5, -2.0, 0.0), &t);
+        assert!((point_at(&t, w) - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-12);
+    }
+}

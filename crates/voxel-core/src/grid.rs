@@ -1,0 +1,300 @@
+//! The voxel grid: normalization of the model (the article's `modelSize` scaling), cell sizes, the cell
+//! budget, and a packed bit set over cells.
+
+use glam::DVec3;
+
+use crate::error::{Result, VoxelError};
+use crate::geom::GridTriangle;
+use crate::soup::TriangleSoup;
+
+/// How the cell size is chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GridSize {
+    /// Cell width in normalized model units (the article's `gridSize`, 0.24 with a model size of 9).
+    Cell(f32),
+    /// Cells along the longest axis of the model.
+    Resolution(u32),
+}
+
+impl Default for GridSize {
+    fn default() -> Self {
+        GridSize::Cell(0.24)
+    }
+}
+
+/// The placement of the grid in normalized model space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSpec {
+    /// Cells along x, y, z.
+    pub dims: [u32; 3],
+    /// Cell size along x, y, z (x and z equal; y may be taller).
+    pub cell: [f32; 3],
+    /// The minimum corner of cell (0, 0, 0).
+    pub origin: [f32; 3],
+    /// Model space = (world − `center`) · `scale`.
+    pub scale: f32,
+    /// The world-space centre of the model's bounding box.
+    pub center: [f32; 3],
+}
+
+impl GridSpec {
+    /// Fits a grid around `soup`: the bounding-box diagonal is scaled to `model_size` and centred at the
+    /// origin; cells are `width` wide (x, z) and `width * height_ratio` tall (y).
+    pub fn fit(soup: &TriangleSoup, model_size: f32, size: GridSize, height_ratio: f32, max_cells: u64) -> Result<Self> {
+        if !(model_size.is_finite() && model_size > 0.0) {
+            return Err(VoxelError::Parameter(format!("model size must be positive, got {model_size}")));
+        }
+        if !(height_ratio.is_finite() && (0.1..=10.0).contains(&height_ratio)) {
+            return Err(VoxelError::Parameter(format!("cell height ratio must be in 0.1..=10, got {height_ratio}")));
+        }
+        let (lo, hi) = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
+        let lo = DVec3::from(lo.map(f64::from));
+        let hi = DVec3::from(hi.map(f64::from));
+        let diag = (hi - lo).length();
+        if !(diag.is_finite() && diag > 0.0) {
+            return Err(VoxelError::Empty(" (all vertices coincide)".into()));
+        }
+        let scale = f64::from(model_size) / diag;
+        let extent = (hi - lo) * scale;
+        let ratio = f64::from(height_ratio);
+        let width = match size {
+            GridSize::Cell(w) if w.is_finite() && w > 0.0 => f64::from(w),
+            GridSize::Cell(w) => return Err(VoxelError::Parameter(format!("grid size must be positive, got {w}"))),
+            GridSize::Resolution(r) if (1..=65_535).contains(&r) => {
+                extent.x.max(extent.z).max(extent.y / ratio) / f64::from(r)
+            }
+            GridSize::Resolution(r) => {
+                return Err(VoxelError::Parameter(format!("resolution must be in 1..=65535, got {r}")));
+            }
+        };
+        let cell = DVec3::new(width, width * ratio, width);
+        // A hair of tolerance so that an extent of exactly R cells does not round up to R + 1.
+        let n = (extent / cell - DVec3::splat(1e-6)).ceil().max(DVec3::ONE);
+        let too_big = |nx: f64, ny: f64, nz: f64| VoxelError::GridTooLarge {
+            nx: nx as u64,
+            ny: ny as u64,
+            nz: nz as u64,
+            cells: (nx * ny * nz).min(u64::MAX as f64) as u64,
+            budget: max_cells,
+        };
+        if n.x * n.y * n.z > max_cells.min(u64::from(u32::MAX)) as f64 || n.max_element() > 65_535.0 {
+            return Err(too_big(n.x, n.y, n.z));
+        }
+        let dims = [n.x as u32, n.y as u32, n.z as u32];
+        let origin = -(n * cell) / 2.0;
+        let center = (lo + hi) / 2.0;
+        Ok(Self {
+            dims,
+            cell: cell.as_vec3().to_array(),
+            origin: origin.as_vec3().to_array(),
+            scale: scale as f32,
+            center: center.as_vec3().to_array(),
+        })
+    }
+
+    /// Total number of cells.
+    pub fn cell_count(&self) -> usize {
+        self.dims.iter().map(|&d| d as usize).product()
+    }
+
+    /// Linear index of cell (x, y, z): z varies fastest, so a +Z column is contiguous.
+    #[inline]
+    pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
+        (x as usize * self.dims[1] as usize + y as usize) * self.dims[2] as usize + z as usize
+    }
+
+    /// The cell (x, y, z) of a linear index.
+    #[inline]
+    pub fn coords(&self, index: usize) -> [u32; 3] {
+        let nz = self.dims[2] as usize;
+        let ny = self.dims[1] as usize;
+        [(index / nz / ny) as u32, (index / nz % ny) as u32, (index % nz) as u32]
+    }
+
+    /// The index of the face neighbour of `index` one step along `axis` in direction `dir` (±1).
+    #[inline]
+    pub fn neighbour(&self, index: usize, axis: usize, dir: i32) -> Option<usize> {
+        let mut step = [0; 3];
+        step[axis] = dir;
+        self.offset(index, step)
+    }
+
+    /// The index of the cell at `index + step`, if inside the grid.
+    #[inline]
+    pub fn offset(&self, index: usize, step: [i32; 3]) -> Option<usize> {
+        let c = self.coords(index);
+        let mut out = [0u32; 3];
+        for a in 0..3 {
+            let v = i64::from(c[a]) + i64::from(step[a]);
+            if v < 0 || v >= i64::from(self.dims[a]) {
+                return None;
+            }
+            out[a] = v as u32;
+        }
+        Some(self.index(out[0], out[1], out[2]))
+    }
+
+    /// Model-space centre of cell (x, y, z).
+    pub fn cell_center(&self, c: [u32; 3]) -> [f32; 3] {
+        std::array::from_fn(|a| self.origin[a] + (c[a] as f32 + 0.5) * self.cell[a])
+    }
+
+    /// World position → grid coordinates (cell (i, j, k) spans [i, i+1] etc.), in f64.
+    #[inline]
+    pub fn to_grid(&self, p: [f32; 3]) -> DVec3 {
+        DVec3::from_array(std::array::from_fn(|a| {
+            ((f64::from(p[a]) - f64::from(self.center[a])) * f64::from(self.scale) - f64::from(self.origin[a]))
+                / f64::from(self.cell[a])
+        }))
+    }
+
+    /// Every triangle of `soup` in grid coordinates.
+    pub fn grid_triangles(&self, soup: &TriangleSoup) -> Vec<GridTriangle> {
+        soup.vertices
+            .chunks_exact(3)
+            .map(|t| [self.to_grid(t[0].position), self.to_grid(t[1].position), self.to_grid(t[2].position)])
+            .collect()
+    }
+}
+
+/// One bit per cell of a grid, in the grid's linear order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BitGrid {
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl BitGrid {
+    /// All cells clear.
+    pub fn new(len: usize) -> Self {
+        Self { words: vec![0; len.div_ceil(64)], len }
+    }
+
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the grid has no cells.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether cell `i` is set.
+    #[inline]
+    pub fn get(&self, i: usize) -> bool {
+        self.words[i / 64] >> (i % 64) & 1 == 1
+    }
+
+    /// Sets cell `i`.
+    #[inline]
+    pub fn set(&mut self, i: usize) {
+        self.words[i / 64] |= 1 << (i % 64);
+    }
+
+    /// Sets cells `range` (used for filled runs of a column).
+    pub fn set_range(&mut self, range: std::ops::Range<usize>) {
+        let mut i = range.start;
+        while i < range.end {
+            let (w, b) = (i / 64, i % 64);
+            let n = (64 - b).min(range.end - i);
+            let mask = if n == 64 { u64::MAX } else { ((1u64 << n) - 1) << b };
+            self.words[w] |= mask;
+            i += n;
+        }
+    }
+
+    /// Number of set cells.
+    pub fn count(&self) -> usize {
+        self.words.iter().map(|w| w.count_ones() as usize).sum()
+    }
+
+    /// Number of set cells in `range`.
+    pub fn count_range(&self, range: std::ops::Range<usize>) -> usize {
+        let mut i = range.start;
+        let mut total = 0;
+        while i < range.end {
+            let (w, b) = (i / 64, i % 64);
+            let n = (64 - b).min(range.end - i);
+            let mask = if n == 64 { u64::MAX } else { ((1u64 << n) - 1) << b };
+            total += (self.words[w] & mask).count_ones() as usize;
+            i += n;
+        }
+        total
+    }
+
+    /// Sets every cell set in `other`.
+    pub fn union_with(&mut self, other: &BitGrid) {
+        for (a, b) in self.words.iter_mut().zip(&other.words) {
+            *a |= *b;
+        }
+    }
+
+    /// Indices of the set cells, ascending.
+    pub fn ones(&self) -> impl Iterator<Item = usize> + '_ {
+        self.words.iter().enumerate().flat_map(|(w, &word)| {
+            let mut bits = word;
+            std::iter::from_fn(move || {
+                if bits == 0 {
+                    return None;
+                }
+                let b = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                Some(w * 64 + b)
+            })
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::soup::{Material, Vertex};
+
+    fn unit_cube_corners() -> TriangleSoup {
+        let mut soup = TriangleSoup::default();
+        let m = soup.add_material(Material::default());
+        let p = soup.add_part(m, "t");
+        soup.push_triangle(p, [Vertex::at([0.0; 3]), Vertex::at([2.0, 0.0, 0.0]), Vertex::at([0.0, 1.0, 4.0])]);
+        soup
+    }
+
+    #[test]
+    fn resolution_sets_cells_along_the_longest_axis() {
+        let g = GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
+        assert_eq!(g.dims, [8, 4, 16]);
+        let g = GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Resolution(16), 1.2, 1 << 26).unwrap();
+        assert!((g.cell[1] / g.cell[0] - 1.2).abs() < 1e-6);
+    }
+
+    #[test]
+    fn absurd_grids_are_refused_with_the_budget() {
+        let err = GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Cell(1e-4), 1.0, 1 << 26).unwrap_err();
+        assert!(matches!(err, VoxelError::GridTooLarge { .. }), "{err}");
+        assert!(err.to_string().contains("exceeds the budget"));
+        assert!(GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Cell(f32::NAN), 1.0, 1 << 26).is_err());
+        assert!(GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Resolution(0), 1.0, 1 << 26).is_err());
+    }
+
+    #[test]
+    fn index_coords_and_neighbours_round_trip() {
+        let g = GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
+        let i = g.index(3, 2, 7);
+        assert_eq!(g.coords(i), [3, 2, 7]);
+        assert_eq!(g.neighbour(i, 2, 1), Some(g.index(3, 2, 8)));
+        assert_eq!(g.neighbour(g.index(0, 0, 0), 0, -1), None);
+        assert_eq!(g.offset(i, [1, -1, 1]), Some(g.index(4, 1, 8)));
+    }
+
+    #[test]
+    fn bit_grid_sets_counts_and_lists() {
+        let mut b = BitGrid::new(130);
+        b.set(0);
+        b.set(64);
+        b.set_range(127..130);
+        assert_eq!(b.count(), 5);
+        assert_eq!(b.count_range(1..128), 2);
+        assert_eq!(b.count_range(0..130), 5);
+        assert_eq!(b.ones().collect::<Vec<_>>(), vec![0, 64, 127, 128, 129]);
+    }
+}

@@ -1,0 +1,165 @@
+//! Bounds-checked accessor reading for every component type glTF allows, including the normalized and
+//! integer encodings of KHR_mesh_quantization and sparse accessors.
+
+use gltf::accessor::{Accessor, DataType, Dimensions};
+use gltf::buffer::{Data, View};
+
+use crate::error::{Result, VoxelError};
+
+/// Number of components of an accessor element.
+fn component_count(dims: Dimensions) -> usize {
+    match dims {
+        Dimensions::Scalar => 1,
+        Dimensions::Vec2 => 2,
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 | Dimensions::Mat2 => 4,
+        Dimensions::Mat3 => 9,
+        Dimensions::Mat4 => 16,
+    }
+}
+
+/// Reads one component of type `ty` at `bytes[0..]` as f64, normalizing integers when `normalized`.
+fn read_component(bytes: &[u8], ty: DataType, normalized: bool) -> f64 {
+    let raw = match ty {
+        DataType::I8 => f64::from(bytes[0] as i8),
+        DataType::U8 => f64::from(bytes[0]),
+        DataType::I16 => f64::from(i16::from_le_bytes([bytes[0], bytes[1]])),
+        DataType::U16 => f64::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+        DataType::U32 => f64::from(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+        DataType::F32 => return f64::from(f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+    };
+    if !normalized {
+        return raw;
+    }
+    match ty {
+        DataType::I8 => (raw / 127.0).max(-1.0),
+        DataType::U8 => raw / 255.0,
+        DataType::I16 => (raw / 32767.0).max(-1.0),
+        DataType::U16 => raw / 65535.0,
+        DataType::U32 => raw / f64::from(u32::MAX),
+        DataType::F32 => raw,
+    }
+}
+
+/// The bytes of `view` within its buffer, checked against the buffer's length.
+fn view_bytes<'a>(view: &View<'_>, buffers: &'a [Data], what: &str) -> Result<&'a [u8]> {
+    let buffer = buffers
+        .get(view.buffer().index())
+        .ok_or_else(|| VoxelError::MissingData(format!("{what}: buffer {} is missing", view.buffer().index())))?;
+    let start = view.offset();
+    let end = start.checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or_else(|| {
+        VoxelError::Invalid(format!(
+            "{what}: buffer view {} ({} bytes at {start}) runs past its buffer of {} bytes",
+            view.index(),
+            view.length(),
+            buffer.len()
+        ))
+    })?;
+    Ok(&buffer[start..end])
+}
+
+/// Reads `count` elements of `ncomp` components of type `ty` from `view` starting at `offset`.
+#[allow(clippy::too_many_arguments)]
+fn read_strided(
+    view: &View<'_>,
+    buffers: &[Data],
+    offset: usize,
+    count: usize,
+    ncomp: usize,
+    ty: DataType,
+    normalized: bool,
+    what: &str,
+) -> Result<Vec<f64>> {
+    let bytes = view_bytes(view, buffers, what)?;
+    let elem = ncomp * ty.size();
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(VoxelError::Invalid(format!("{what}: stride {stride} is smaller than an element ({elem})")));
+    }
+    if count > 0 {
+        let last_end = (count - 1)
+            .checked_mul(stride)
+            .and_then(|s| s.checked_add(offset))
+            .and_then(|s| s.checked_add(elem));
+        if last_end.is_none_or(|e| e > bytes.len()) {
+            return Err(VoxelError::Invalid(format!(
+                "{what}: {count} elements of {elem} bytes do not fit in buffer view {} ({} bytes)",
+                view.index(),
+                bytes.len()
+            )));
+        }
+    }
+    let mut out = Vec::with_capacity(count * ncomp);
+    for i in 0..count {
+        let base = offset + i * stride;
+        for c in 0..ncomp {
+            out.push(read_component(&bytes[base + c * ty.size()..], ty, normalized));
+        }
+    }
+    Ok(out)
+}
+
+/// Reads an accessor as a flat list of f64 components (`count * components` values), applying sparse
+/// substitutions. Returns the values and the number of components per element.
+pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<(Vec<f64>, usize)> {
+    let ncomp = component_count(accessor.dimensions());
+    let ty = accessor.data_type();
+    let count = accessor.count();
+    let normalized = accessor.normalized();
+    if count > 1 << 28 {
+        return Err(VoxelError::Invalid(format!("{what}: accessor with {count} elements is too large")));
+    }
+    let mut values = match accessor.view() {
+        Some(view) => read_strided(&view, buffers, accessor.offset(), count, ncomp, ty, normalized, what)?,
+        None => vec![0.0; count * ncomp],
+    };
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        let idx_ty = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let indices = read_strided(&sparse.indices().view(), buffers, sparse.indices().offset(), n, 1, idx_ty, false, what)?;
+        let subst = read_strided(&sparse.values().view(), buffers, sparse.values().offset(), n, ncomp, ty, normalized, what)?;
+        for (k, &index) in indices.iter().enumerate() {
+            let i = index as usize;
+            if i >= count {
+                return Err(VoxelError::Invalid(format!("{what}: sparse index {i} out of range 0..{count}")));
+            }
+            values[i * ncomp..(i + 1) * ncomp].copy_from_slice(&subst[k * ncomp..(k + 1) * ncomp]);
+        }
+    }
+    Ok((values, ncomp))
+}
+
+/// Reads an accessor of exactly `N` components per element (as f32).
+pub(crate) fn read_vecs<const N: usize>(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<[f32; N]>> {
+    let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+    if ncomp != N {
+        return Err(VoxelError::Invalid(format!("{what}: expected {N} components per element, found {ncomp}")));
+    }
+    Ok(values.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i] as f32)).collect())
+}
+
+/// Reads an index accessor (unsigned integers, one component).
+pub(crate) fn read_indices(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<u32>> {
+    if !matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32) || accessor.normalized() {
+        return Err(VoxelError::Invalid(format!("{what}: indices must be unsigned integers")));
+    }
+    let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+    if ncomp != 1 {
+        return Err(VoxelError::Invalid(format!("{what}: indices must be scalars")));
+    }
+    Ok(values.into_iter().map(|v| v as u32).collect())
+}
+
+/// Reads a colour accessor (VEC3 or VEC4, float or normalized integers) as linear RGBA.
+pub(crate) fn read_colors(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<[f32; 4]>> {
+    let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+    match ncomp {
+        3 => Ok(values.chunks_exact(3).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]).collect()),
+        4 => Ok(values.chunks_exact(4).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32]).collect()),
+        n => Err(VoxelError::Invalid(format!("{what}: colours need 3 or 4 components, found {n}"))),
+    }
+}

@@ -1,0 +1,286 @@
+//! glTF 2.0 import (through the `gltf` crate) into a world-space [`TriangleSoup`].
+//!
+//! Handles .glb, .gltf with external buffers and images, data URIs, the default scene's node hierarchy
+//! (matrix or TRS, shared meshes), triangle lists/strips/fans and KHR_mesh_quantization. Files that
+//! require an extension we cannot decode (Draco, meshopt) are refused with an error naming it.
+
+mod accessor;
+mod materials;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{DMat4, DVec3};
+use gltf::mesh::Mode;
+
+use crate::error::{Result, VoxelError};
+use crate::soup::{TriangleSoup, Vertex};
+
+use materials::MaterialCache;
+
+/// Required extensions we understand (or that do not change geometry or base colour).
+const TOLERATED_REQUIRED: &[&str] = &[
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
+    "KHR_materials_unlit",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_specular",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_materials_iridescence",
+    "KHR_materials_anisotropy",
+    "KHR_materials_dispersion",
+    "KHR_lights_punctual",
+];
+
+/// The most triangles an import may produce (node instancing can multiply a small file).
+pub const MAX_TRIANGLES: usize = 20_000_000;
+
+/// Imports a .glb or .gltf file (external buffers and images resolved next to it).
+pub fn load_file(path: &Path) -> Result<TriangleSoup> {
+    let bytes = std::fs::read(path).map_err(|source| VoxelError::Io { path: path.to_owned(), source })?;
+    load_slice(&bytes, path.parent())
+}
+
+/// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
+pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
+    let document = validate(document)?;
+    let buffers = gltf::import_buffers(&document, base_dir, blob)
+        .map_err(|e| VoxelError::MissingData(format!("buffer: {e}")))?;
+    let mut builder = SoupBuilder {
+        soup: TriangleSoup::default(),
+        materials: MaterialCache::new(base_dir),
+        buffers: &buffers,
+        parts_of_mesh: HashMap::new(),
+    };
+    for (node, transform) in scene_instances(&document)? {
+        if let Some(mesh) = node.mesh() {
+            builder.add_mesh(&mesh, &transform)?;
+        }
+    }
+    let soup = builder.soup;
+    if soup.triangle_count() == 0 {
+        return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
+    }
+    soup.validate()?;
+    Ok(soup)
+}
+
+fn describe_parse_error(e: gltf::Error) -> VoxelError {
+    match e {
+        gltf::Error::Binary(b) => VoxelError::Parse(format!("corrupt or truncated GLB ({b:?})")),
+        gltf::Error::Deserialize(d) => VoxelError::Parse(format!("JSON: {d}")),
+        other => VoxelError::Parse(other.to_string()),
+    }
+}
+
+/// Refuses undecodable required extensions, then runs the `gltf` crate's validation.
+fn validate(document: gltf::Document) -> Result<gltf::Document> {
+    let mut root = document.into_json();
+    if let Some(ext) = root.extensions_required.iter().find(|e| !TOLERATED_REQUIRED.contains(&e.as_str())) {
+        return Err(VoxelError::UnsupportedExtension(ext.clone()));
+    }
+    // The gltf crate does not list these as supported; we handle them ourselves, so validate without.
+    root.extensions_required.clear();
+    gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let list: Vec<String> = errors.iter().take(3).map(|(path, err)| format!("{path}: {err}")).collect();
+            let more = errors.len().saturating_sub(3);
+            let tail = if more > 0 { format!(" (and {more} more)") } else { String::new() };
+            VoxelError::Invalid(format!("{}{tail}", list.join("; ")))
+        }
+        other => VoxelError::Parse(other.to_string()),
+    })
+}
+
+/// Every mesh-carrying node instance of the default scene with its composed world transform.
+fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMat4)>> {
+    let roots: Vec<gltf::Node<'_>> = match document.default_scene().or_else(|| document.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            // No scene: take the nodes nobody lists as a child.
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut out = Vec::new();
+    // Depth-first with the ancestor chain, so a node that is its own ancestor is caught, not looped on.
+    let mut stack: Vec<(gltf::Node<'_>, DMat4, Vec<usize>)> =
+        roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY, Vec::new())).collect();
+    while let Some((node, parent, mut chain)) = stack.pop() {
+        if chain.contains(&node.index()) {
+            return Err(VoxelError::Invalid(format!("node {} is its own ancestor (recursive node graph)", node.index())));
+        }
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(VoxelError::NonFinite(format!("the transform of node {}", node.index())));
+        }
+        chain.push(node.index());
+        if out.len() + stack.len() > MAX_TRIANGLES {
+            return Err(VoxelError::Invalid("the node graph expands to too many instances".into()));
+        }
+        for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+            stack.push((child, world, chain.clone()));
+        }
+        if node.mesh().is_some() {
+            out.push((node, world));
+        }
+    }
+    Ok(out)
+}
+
+/// Expands primitive indices of `mode` into triangle corner triples.
+fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::Triangles => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
+            .collect(),
+        Mode::TriangleFan => {
+            indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect()
+        }
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
+    }
+}
+
+struct SoupBuilder<'a> {
+    soup: TriangleSoup,
+    materials: MaterialCache,
+    buffers: &'a [gltf::buffer::Data],
+    /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
+    parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
+}
+
+/// One primitive's triangles in mesh space with their attributes.
+struct DecodedPrimitive {
+    material: usize,
+    name: String,
+    positions: Vec<[f32; 3]>,
+    uvs: Option<Vec<[f32; 2]>>,
+    colors: Option<Vec<[f32; 4]>>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl SoupBuilder<'_> {
+    fn add_mesh(&mut self, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
+        if !self.parts_of_mesh.contains_key(&mesh.index()) {
+            let mut decoded = Vec::new();
+            for prim in mesh.primitives() {
+                if let Some(d) = self.decode_primitive(mesh, &prim)? {
+                    decoded.push(d);
+                }
+            }
+            self.parts_of_mesh.insert(mesh.index(), decoded);
+        }
+        let prims = &self.parts_of_mesh[&mesh.index()];
+        let added: usize = prims.iter().map(|p| p.triangles.len()).sum();
+        if self.soup.triangle_count() + added > MAX_TRIANGLES {
+            return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
+        }
+        for prim in prims {
+            let part = self.soup.add_part(prim.material, prim.name.clone());
+            let world: Vec<[f32; 3]> = prim
+                .positions
+                .iter()
+                .map(|p| transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array())
+                .collect();
+            for tri in &prim.triangles {
+                let corners = tri.map(|i| {
+                    let i = i as usize;
+                    Vertex {
+                        position: world[i],
+                        uv: prim.uvs.as_ref().map_or([0.0; 2], |u| u[i]),
+                        color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
+                    }
+                });
+                self.soup.push_triangle(part, corners);
+            }
+        }
+        Ok(())
+    }
+
+    fn decode_primitive(&mut self, mesh: &gltf::Mesh<'_>, prim: &gltf::Primitive<'_>) -> Result<Option<DecodedPrimitive>> {
+        let name = format!("{} primitive {}", mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned), prim.index());
+        if matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
+            return Ok(None);
+        }
+        let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+            return Err(VoxelError::Invalid(format!("{name} has no POSITION attribute")));
+        };
+        let positions = accessor::read_vecs::<3>(&pos_acc, self.buffers, &format!("{name} POSITION"))?;
+        if positions.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(VoxelError::NonFinite(name));
+        }
+        let indices = match prim.indices() {
+            Some(acc) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(VoxelError::Invalid(format!(
+                "{name}: vertex index {bad} is out of range (the primitive has {} vertices)",
+                positions.len()
+            )));
+        }
+        let (soup_material, tex_coord) = self.materials.resolve(&mut self.soup, &prim.material(), self.buffers)?;
+        let uvs = match tex_coord {
+            Some(set) => match prim.get(&gltf::Semantic::TexCoords(set.index)) {
+                Some(acc) => {
+                    let raw = accessor::read_vecs::<2>(&acc, self.buffers, &format!("{name} TEXCOORD_{}", set.index))?;
+                    check_len(&name, "TEXCOORD", raw.len(), positions.len())?;
+                    Some(raw.into_iter().map(|uv| set.transform(uv)).collect())
+                }
+                None => None,
+            },
+            None => None,
+        };
+        let colors = match prim.get(&gltf::Semantic::Colors(0)) {
+            Some(acc) => {
+                let c = accessor::read_colors(&acc, self.buffers, &format!("{name} COLOR_0"))?;
+                check_len(&name, "COLOR_0", c.len(), positions.len())?;
+                Some(c)
+            }
+            None => None,
+        };
+        Ok(Some(DecodedPrimitive {
+            material: soup_material,
+            name,
+            positions,
+            uvs,
+            colors,
+            triangles: triangles_of(prim.mode(), &indices),
+        }))
+    }
+}
+
+fn check_len(name: &str, what: &str, len: usize, expected: usize) -> Result<()> {
+    if len == expected {
+        Ok(())
+    } else {
+        Err(VoxelError::Invalid(format!("{name}: {what} has {len} elements but POSITION has {expected}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_expand_to_triangles() {
+        assert_eq!(triangles_of(Mode::TriangleStrip, &[0, 1, 2, 3]), vec![[0, 1, 2], [2, 1, 3]]);
+        assert_eq!(triangles_of(Mode::TriangleFan, &[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(triangles_of(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
+        assert!(triangles_of(Mode::Lines, &[0, 1, 2]).is_empty());
+    }
+}

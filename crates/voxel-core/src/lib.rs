@@ -1,0 +1,28 @@
+//! voxel-core: fast, robust, coloured voxelization of glTF models — the library under voxel-art.
+//!
+//! ```text
+//! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox export, stats)
+//! ```
+//! No rendering types here; deterministic whatever the thread count.
+
+pub mod bvh;
+pub mod cli;
+pub mod color;
+pub mod error;
+mod fill;
+pub mod geom;
+pub mod grid;
+pub mod import;
+mod shell;
+pub mod soup;
+pub mod vox;
+pub mod voxelize;
+
+pub use error::{Result, VoxelError};
+pub use fill::reference_fill;
+pub use grid::{BitGrid, GridSize, GridSpec};
+pub use import::{load_file, load_slice};
+pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
+pub use voxelize::{
+    DEFAULT_MAX_CELLS, FillMode, Method, ShellMode, Voxel, VoxelModel, VoxelStats, VoxelizeOptions, voxelize,
+};

@@ -1,0 +1,152 @@
+//! The conservative surface shell: every cell a triangle overlaps, with the triangle nearest to the cell's
+//! centre (for colour) and whether the solid fill already accounts for that piece of surface.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::geom::{GridTriangle, closest_point_barycentric, point_at, triangle_box_overlap};
+use crate::grid::{BitGrid, GridSpec};
+
+/// Shell cells, ascending by linear index, with per-cell data.
+#[derive(Debug, Default)]
+pub(crate) struct Shell {
+    /// Linear indices of the cells any triangle overlaps.
+    pub cells: Vec<u32>,
+    /// For each cell, the overlapping triangle closest to the cell centre.
+    pub nearest: Vec<u32>,
+    /// For each cell, whether a thin piece of surface passes through it: a triangle overlaps it while
+    /// neither the cell nor its neighbours on either side along the triangle's normal are filled.
+    pub thin: Vec<bool>,
+}
+
+impl Shell {
+    /// The nearest triangle of shell cell `index`, if it is one.
+    pub fn nearest_of(&self, index: usize) -> Option<u32> {
+        self.cells.binary_search(&(index as u32)).ok().map(|k| self.nearest[k])
+    }
+}
+
+/// The step to the face, edge or corner neighbour along a normal: components within half of the largest
+/// one count.
+fn normal_step(n: DVec3) -> [i32; 3] {
+    let m = n.abs().max_element();
+    [n.x, n.y, n.z].map(|c| if c.abs() >= 0.5 * m { c.signum() as i32 } else { 0 })
+}
+
+/// One (cell, triangle) overlap packed for sorting: cell, then distance² (f32 bits, which order like the
+/// non-negative floats), then triangle, then the thin flag — a total order, so the result is deterministic.
+fn pack(cell: usize, dist2: f32, tri: u32, thin: bool) -> u128 {
+    (cell as u128) << 96 | u128::from(dist2.to_bits()) << 64 | u128::from(tri) << 32 | u128::from(thin)
+}
+
+/// Whether the cell at `c + step` exists and is filled.
+fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bool {
+    let mut n = [0u32; 3];
+    for a in 0..3 {
+        let v = i64::from(c[a]) + i64::from(step[a]);
+        if v < 0 || v >= i64::from(spec.dims[a]) {
+            return false;
+        }
+        n[a] = v as u32;
+    }
+    fill.get(spec.index(n[0], n[1], n[2]))
+}
+
+/// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
+/// cell boundary lands in one cell, not two).
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Vec<u128>) {
+    let t = &tris[tri];
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    if !(n.length_squared() > 0.0) {
+        return; // zero-area triangles add no surface
+    }
+    let step = normal_step(n);
+    let back = step.map(|s| -s);
+    let lo = t[0].min(t[1]).min(t[2]);
+    let hi = t[0].max(t[1]).max(t[2]);
+    let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
+    let cell_of = |a: usize, v: f64| v.floor().clamp(0.0, last(a)) as u32;
+    let mut emit = |c: [u32; 3], exact: bool| {
+        let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
+        if !exact && !triangle_box_overlap(center, DVec3::splat(0.5), t) {
+            return;
+        }
+        let index = spec.index(c[0], c[1], c[2]);
+        let thin = !fill.get(index) && !filled_at(spec, fill, c, step) && !filled_at(spec, fill, c, back);
+        let dist2 = point_at(t, closest_point_barycentric(center, t)).distance_squared(center) as f32;
+        out.push(pack(index, dist2, tri as u32, thin));
+    };
+    let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
+    if lo_cell == [0, 1, 2].map(|a| cell_of(a, hi[a])) {
+        // The whole triangle sits in one cell: it overlaps that cell and no other.
+        emit(lo_cell, true);
+        return;
+    }
+    let an = n.abs();
+    let d = if an.x >= an.y && an.x >= an.z { 0 } else if an.y >= an.z { 1 } else { 2 };
+    let (u, v) = ((d + 1) % 3, (d + 2) % 3);
+    for iu in cell_of(u, lo[u])..=cell_of(u, hi[u]) {
+        for iv in cell_of(v, lo[v])..=cell_of(v, hi[v]) {
+            // Extent of the plane along the dominant axis over this cell's footprint.
+            let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
+            let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
+            let mut dlo = f64::INFINITY;
+            let mut dhi = f64::NEG_INFINITY;
+            for cu in us {
+                for cv in vs {
+                    // n · (p − t0) = 0 solved for the dominant coordinate.
+                    let pd = t[0][d] - (n[u] * (cu - t[0][u]) + n[v] * (cv - t[0][v])) / n[d];
+                    dlo = dlo.min(pd);
+                    dhi = dhi.max(pd);
+                }
+            }
+            for id in cell_of(d, dlo.max(lo[d]))..=cell_of(d, dhi.min(hi[d])) {
+                let mut c = [0u32; 3];
+                c[u] = iu;
+                c[v] = iv;
+                c[d] = id;
+                emit(c, false);
+            }
+        }
+    }
+}
+
+/// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
+pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
+    let mut pairs: Vec<u128> = (0..tris.len())
+        .into_par_iter()
+        .fold(Vec::new, |mut out, tri| {
+            overlaps(spec, tris, tri, fill, &mut out);
+            out
+        })
+        .reduce(Vec::new, |mut a, mut b| {
+            a.append(&mut b);
+            a
+        });
+    pairs.par_sort_unstable();
+    let mut shell = Shell::default();
+    for p in pairs {
+        let (cell, tri, thin) = ((p >> 96) as u32, (p >> 32) as u32, p & 1 == 1);
+        if shell.cells.last() == Some(&cell) {
+            let last = shell.thin.len() - 1;
+            shell.thin[last] |= thin;
+        } else {
+            shell.cells.push(cell);
+            shell.nearest.push(tri);
+            shell.thin.push(thin);
+        }
+    }
+    shell
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_steps_pick_dominant_components() {
+        assert_eq!(normal_step(DVec3::new(0.0, 2.0, 0.1)), [0, 1, 0]);
+        assert_eq!(normal_step(DVec3::new(-1.0, 1.0, 0.2)), [-1, 1, 0]);
+        assert_eq!(normal_step(DVec3::new(1.0, -1.0, 0.9)), [1, -1, 1]);
+    }
+}

@@ -1,0 +1,251 @@
+//! A world-space triangle soup with everything colour sampling needs: the common input of the voxelizer.
+//!
+//! Both front doors produce it: the `gltf`-crate importer ([`crate::import`]) and the app's Bevy asset reader.
+
+use std::sync::Arc;
+
+use crate::error::{Result, VoxelError};
+
+/// How texture coordinates outside [0, 1] are mapped (glTF sampler wrap modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    /// Tile the texture (glTF default).
+    #[default]
+    Repeat,
+    /// Tile the texture, mirroring every other tile.
+    MirroredRepeat,
+    /// Clamp to the edge texels.
+    ClampToEdge,
+}
+
+impl Wrap {
+    /// Maps a texel coordinate (any integer) into `0..size`.
+    pub fn apply(self, texel: i64, size: u32) -> u32 {
+        let n = i64::from(size.max(1));
+        let t = match self {
+            Wrap::Repeat => texel.rem_euclid(n),
+            Wrap::ClampToEdge => texel.clamp(0, n - 1),
+            Wrap::MirroredRepeat => {
+                let period = texel.rem_euclid(2 * n);
+                if period < n { period } else { 2 * n - 1 - period }
+            }
+        };
+        t as u32
+    }
+}
+
+/// An RGBA8 image in sRGB encoding (as glTF base-colour textures are).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width * height` texels, row-major from the top-left, RGBA8 sRGB.
+    pub rgba: Vec<[u8; 4]>,
+}
+
+impl Texture {
+    /// Makes a texture, checking that the texel count matches the size.
+    pub fn new(width: u32, height: u32, rgba: Vec<[u8; 4]>) -> Result<Self> {
+        if width == 0 || height == 0 || rgba.len() != width as usize * height as usize {
+            return Err(VoxelError::Invalid(format!(
+                "texture of {width}x{height} with {} texels",
+                rgba.len()
+            )));
+        }
+        Ok(Self { width, height, rgba })
+    }
+
+    /// The texel nearest to `uv` (glTF convention: v grows downwards), with the given wrap modes.
+    pub fn sample_nearest(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> [u8; 4] {
+        let fx = (uv[0] * self.width as f32).floor();
+        let fy = (uv[1] * self.height as f32).floor();
+        // Saturating float-to-int casts keep NaN and huge coordinates in range.
+        let x = wrap[0].apply(fx as i64, self.width);
+        let y = wrap[1].apply(fy as i64, self.height);
+        self.rgba[y as usize * self.width as usize + x as usize]
+    }
+}
+
+/// A base-colour texture bound to a material: the image plus its sampler's wrap modes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureBinding {
+    /// The decoded image, shared between materials.
+    pub texture: Arc<Texture>,
+    /// Wrap modes along u and v.
+    pub wrap: [Wrap; 2],
+}
+
+/// The colour sources of one material: base colour factor (linear RGBA) and an optional texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// `baseColorFactor`, linear RGBA.
+    pub base_color: [f32; 4],
+    /// `baseColorTexture`, if any; the soup's UVs are already the texture's coordinate set.
+    pub texture: Option<TextureBinding>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self { base_color: [1.0; 4], texture: None }
+    }
+}
+
+/// One part of the model: a glTF primitive instance (mesh primitive under one node).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    /// Index into [`TriangleSoup::materials`].
+    pub material: usize,
+    /// A readable name (mesh name and primitive index) for messages and the UI.
+    pub name: String,
+}
+
+/// One corner of a triangle: world-space position plus the attributes colour sampling reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vertex {
+    /// World-space position.
+    pub position: [f32; 3],
+    /// Texture coordinate of the material's base-colour texture set.
+    pub uv: [f32; 2],
+    /// Linear RGBA vertex colour (`COLOR_0`), white when absent.
+    pub color: [f32; 4],
+}
+
+impl Vertex {
+    /// A vertex with only a position (white, uv 0).
+    pub fn at(position: [f32; 3]) -> Self {
+        Self { position, uv: [0.0; 2], color: [1.0; 4] }
+    }
+}
+
+/// World-space triangles grouped into parts, with their materials.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleSoup {
+    /// Materials referenced by parts.
+    pub materials: Vec<Material>,
+    /// Parts referenced by triangles.
+    pub parts: Vec<Part>,
+    /// Three vertices per triangle.
+    pub vertices: Vec<Vertex>,
+    /// The part of each triangle.
+    pub triangle_parts: Vec<u32>,
+}
+
+impl TriangleSoup {
+    /// Adds a material and returns its index.
+    pub fn add_material(&mut self, material: Material) -> usize {
+        self.materials.push(material);
+        self.materials.len() - 1
+    }
+
+    /// Adds a part using material `material` and returns its index.
+    pub fn add_part(&mut self, material: usize, name: impl Into<String>) -> u32 {
+        self.parts.push(Part { material, name: name.into() });
+        (self.parts.len() - 1) as u32
+    }
+
+    /// Adds a triangle to part `part`.
+    pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
+        self.vertices.extend_from_slice(&corners);
+        self.triangle_parts.push(part);
+    }
+
+    /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.
+    pub fn from_indexed(positions: &[[f32; 3]], triangles: &[[u32; 3]], base_color: [f32; 4]) -> Self {
+        let mut soup = Self::default();
+        let material = soup.add_material(Material { base_color, texture: None });
+        let part = soup.add_part(material, "mesh");
+        for t in triangles {
+            soup.push_triangle(part, t.map(|i| Vertex::at(positions[i as usize])));
+        }
+        soup
+    }
+
+    /// The number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_parts.len()
+    }
+
+    /// The three corners of triangle `t`.
+    pub fn triangle(&self, t: usize) -> &[Vertex] {
+        &self.vertices[3 * t..3 * t + 3]
+    }
+
+    /// The material of triangle `t`.
+    pub fn material_of(&self, t: usize) -> &Material {
+        &self.materials[self.parts[self.triangle_parts[t] as usize].material]
+    }
+
+    /// Checks the soup is usable: non-empty, finite, consistent indices.
+    pub fn validate(&self) -> Result<()> {
+        if self.triangle_parts.is_empty() {
+            return Err(VoxelError::Empty(String::new()));
+        }
+        if self.vertices.len() != 3 * self.triangle_parts.len() {
+            return Err(VoxelError::Invalid("vertex count is not three per triangle".into()));
+        }
+        for (t, &part) in self.triangle_parts.iter().enumerate() {
+            let Some(p) = self.parts.get(part as usize) else {
+                return Err(VoxelError::Invalid(format!("triangle {t} refers to missing part {part}")));
+            };
+            if p.material >= self.materials.len() {
+                return Err(VoxelError::Invalid(format!("part {} refers to a missing material", p.name)));
+            }
+            if self.triangle(t).iter().any(|v| v.position.iter().any(|c| !c.is_finite())) {
+                return Err(VoxelError::NonFinite(p.name.clone()));
+            }
+        }
+        Ok(())
+    }
+
+    /// The axis-aligned bounds (min, max) of all vertices; `None` when empty.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let first = self.vertices.first()?.position;
+        Some(self.vertices.iter().fold((first, first), |(mut lo, mut hi), v| {
+            for a in 0..3 {
+                lo[a] = lo[a].min(v.position[a]);
+                hi[a] = hi[a].max(v.position[a]);
+            }
+            (lo, hi)
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_modes_map_into_range() {
+        assert_eq!(Wrap::Repeat.apply(-1, 4), 3);
+        assert_eq!(Wrap::Repeat.apply(9, 4), 1);
+        assert_eq!(Wrap::ClampToEdge.apply(-5, 4), 0);
+        assert_eq!(Wrap::ClampToEdge.apply(9, 4), 3);
+        assert_eq!(Wrap::MirroredRepeat.apply(4, 4), 3);
+        assert_eq!(Wrap::MirroredRepeat.apply(5, 4), 2);
+        assert_eq!(Wrap::MirroredRepeat.apply(-1, 4), 0);
+    }
+
+    #[test]
+    fn nearest_sampling_picks_the_texel_under_uv() {
+        let tex = Texture::new(2, 2, vec![[1, 0, 0, 255], [2, 0, 0, 255], [3, 0, 0, 255], [4, 0, 0, 255]]).unwrap();
+        let w = [Wrap::Repeat; 2];
+        assert_eq!(tex.sample_nearest([0.25, 0.25], w)[0], 1);
+        assert_eq!(tex.sample_nearest([0.75, 0.25], w)[0], 2);
+        assert_eq!(tex.sample_nearest([0.25, 0.75], w)[0], 3);
+        assert_eq!(tex.sample_nearest([1.75, -0.25], w)[0], 4);
+        assert_eq!(tex.sample_nearest([f32::NAN, 0.0], w)[0], 1);
+    }
+
+    #[test]
+    fn validate_rejects_nan_and_empty() {
+        let mut soup = TriangleSoup::default();
+        assert!(matches!(soup.validate(), Err(VoxelError::Empty(_))));
+        let m = soup.add_material(Material::default());
+        let p = soup.add_part(m, "bad");
+        soup.push_triangle(p, [Vertex::at([0.0; 3]), Vertex::at([1.0, 0.0, f32::NAN]), Vertex::at([0.0, 1.0, 0.0])]);
+        let err = soup.validate().unwrap_err();
+        assert!(err.to_string().contains("NaN"), "{err}");
+    }
+}

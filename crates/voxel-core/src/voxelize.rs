@@ -1,0 +1,386 @@
+//! The voxelization pipeline: normalize → fill → shell → combine → colour → (hollow).
+
+use std::collections::HashSet;
+use std::sync::OnceLock;
+
+use glam::{DVec3, Vec3A};
+use obvhs::aabb::Aabb;
+use rayon::prelude::*;
+
+use crate::bvh::TriangleBvh;
+use crate::color::{pastel, sample};
+use crate::error::{Result, VoxelError};
+use crate::fill::{crossings_by_bvh, crossings_by_rasterizing, fill_columns, reachable_from_outside, reference_fill};
+use crate::geom::{GridTriangle, closest_point_barycentric, point_at};
+use crate::grid::{BitGrid, GridSize, GridSpec};
+use crate::shell::{Shell, shell};
+use crate::soup::TriangleSoup;
+
+/// How the inside of the model is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FillMode {
+    /// Ray parity per grid column over the whole model (exact for closed models).
+    #[default]
+    Parity,
+    /// Everything the outside cannot reach through the surface shell (tolerates holes below a cell).
+    Flood,
+    /// No interior: the surface shell only.
+    None,
+}
+
+/// Which surface-shell cells join the solid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShellMode {
+    /// Only where the fill does not already represent the surface: thin parts and open sheets.
+    #[default]
+    Auto,
+    /// Every cell a triangle touches (overshoots the volume by about half a cell all round).
+    All,
+    /// None: the fill alone.
+    None,
+}
+
+/// Which implementation computes the parity fill (all give the same cells).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// Triangle-major rasterization of the column crossings.
+    #[default]
+    Fast,
+    /// One BVH query per column.
+    Bvh,
+    /// The article's algorithm: one ray per cell centre against every triangle (slow; for tests).
+    Reference,
+}
+
+/// Everything that shapes a voxelization.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelizeOptions {
+    /// The model's bounding-box diagonal after normalization (the article's `modelSize`).
+    pub model_size: f32,
+    /// Cell width or resolution.
+    pub grid: GridSize,
+    /// Cell height / cell width (1.2 for Lego bricks).
+    pub cell_height_ratio: f32,
+    /// Interior mode.
+    pub fill: FillMode,
+    /// Shell mode.
+    pub shell: ShellMode,
+    /// Keep only voxels with an empty face neighbour.
+    pub hollow: bool,
+    /// Parity implementation.
+    pub method: Method,
+    /// Apply the pastel remap to colours.
+    pub pastel: bool,
+    /// Largest grid (nx·ny·nz) accepted; the default keeps memory under about 1 GiB.
+    pub max_cells: u64,
+}
+
+/// The default cell budget: 2²⁶ cells (e.g. 406³).
+pub const DEFAULT_MAX_CELLS: u64 = 1 << 26;
+
+impl Default for VoxelizeOptions {
+    fn default() -> Self {
+        Self {
+            model_size: 9.0,
+            grid: GridSize::default(),
+            cell_height_ratio: 1.0,
+            fill: FillMode::default(),
+            shell: ShellMode::default(),
+            hollow: false,
+            method: Method::default(),
+            pastel: false,
+            max_cells: DEFAULT_MAX_CELLS,
+        }
+    }
+}
+
+/// One filled cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Voxel {
+    /// Cell coordinates (x, y, z).
+    pub cell: [u16; 3],
+    /// sRGB RGBA8 colour.
+    pub color: [u8; 4],
+    /// Index of the source part (glTF primitive instance) the colour came from.
+    pub part: u32,
+    /// Whether the cell has an empty face neighbour (can be seen from outside).
+    pub visible: bool,
+}
+
+/// Counts describing a voxelization.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct VoxelStats {
+    /// Triangles in the model.
+    pub triangles: usize,
+    /// Grid size in cells.
+    pub grid: [u32; 3],
+    /// Filled cells (solid, before any hollowing).
+    pub voxels: usize,
+    /// Cells a triangle touches (the surface shell).
+    pub surface: usize,
+    /// Filled cells with an empty face neighbour.
+    pub visible: usize,
+    /// Distinct colours among the output voxels.
+    pub colors: usize,
+}
+
+/// A voxelized model: the grid placement and the output voxels, ascending by (x, y, z).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VoxelModel {
+    /// Where the grid sits in normalized model space.
+    pub spec: GridSpec,
+    /// The voxels (only visible ones when hollowed).
+    pub voxels: Vec<Voxel>,
+    /// Counts.
+    pub stats: VoxelStats,
+    /// Names of the source parts (index = `Voxel::part`).
+    pub parts: Vec<String>,
+}
+
+impl VoxelModel {
+    /// Model-space centre of a voxel.
+    pub fn center(&self, v: &Voxel) -> [f32; 3] {
+        self.spec.cell_center(v.cell.map(u32::from))
+    }
+}
+
+/// Voxelizes `soup` with `options`.
+pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
+    soup.validate()?;
+    if options.fill == FillMode::None && options.shell == ShellMode::None {
+        return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
+    }
+    let spec = GridSpec::fit(soup, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let tris = spec.grid_triangles(soup);
+    if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
+        return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
+    }
+    let bvh = OnceLock::new();
+    let fill = match (options.fill, options.method) {
+        (FillMode::Parity, Method::Fast) => fill_columns(&spec, &crossings_by_rasterizing(&spec, &tris)),
+        (FillMode::Parity, Method::Bvh) => {
+            fill_columns(&spec, &crossings_by_bvh(&spec, &tris, bvh.get_or_init(|| TriangleBvh::build(&tris))))
+        }
+        (FillMode::Parity, Method::Reference) => reference_fill(&spec, &tris),
+        (FillMode::Flood | FillMode::None, _) => BitGrid::new(spec.cell_count()),
+    };
+    let shell = shell(&spec, &tris, &fill);
+    let solid = combine(&spec, options, fill, &shell);
+    let visible = visible_cells(&spec, &solid);
+    let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
+    if options.pastel {
+        colors.par_iter_mut().for_each(|(c, _)| *c = pastel(*c));
+    }
+    let voxels = assemble(&spec, &solid, &visible, &colors, options.hollow);
+    let stats = VoxelStats {
+        triangles: soup.triangle_count(),
+        grid: spec.dims,
+        voxels: solid.count(),
+        surface: shell.cells.len(),
+        visible: visible.len(),
+        // Interior voxels copy visible ones, so the visible cells hold every colour.
+        colors: colors.iter().map(|c| c.0).collect::<HashSet<_>>().len(),
+    };
+    Ok(VoxelModel { spec, voxels, stats, parts: soup.parts.iter().map(|p| p.name.clone()).collect() })
+}
+
+/// The solid cells from the fill and the shell, per the modes.
+fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell) -> BitGrid {
+    let mut shell_bits = BitGrid::new(spec.cell_count());
+    for &c in &shell.cells {
+        shell_bits.set(c as usize);
+    }
+    match options.fill {
+        FillMode::Parity => {
+            let mut solid = fill;
+            match options.shell {
+                ShellMode::All => solid.union_with(&shell_bits),
+                ShellMode::Auto => {
+                    for (k, &c) in shell.cells.iter().enumerate() {
+                        if shell.thin[k] {
+                            solid.set(c as usize);
+                        }
+                    }
+                }
+                ShellMode::None => {}
+            }
+            solid
+        }
+        FillMode::Flood => {
+            let outside = reachable_from_outside(spec, &shell_bits);
+            let mut solid = BitGrid::new(spec.cell_count());
+            for i in 0..spec.cell_count() {
+                if !outside.get(i) && (options.shell != ShellMode::None || !shell_bits.get(i)) {
+                    solid.set(i);
+                }
+            }
+            solid
+        }
+        FillMode::None => shell_bits,
+    }
+}
+
+/// Runs the per-column closure over every (x, y) column in parallel, concatenating results in order.
+fn per_column<T: Send>(spec: &GridSpec, f: impl Fn(u32, u32, usize) -> Vec<T> + Sync + Send) -> Vec<T> {
+    let [nx, ny, nz] = spec.dims;
+    (0..nx * ny)
+        .into_par_iter()
+        .flat_map_iter(|col| f(col / ny, col % ny, col as usize * nz as usize))
+        .collect()
+}
+
+/// Solid cells with an empty face neighbour (the grid's outside counts as empty), ascending.
+fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
+    let [nx, ny, nz] = spec.dims;
+    let (sx, sy) = (ny as usize * nz as usize, nz as usize);
+    per_column(spec, |x, y, base| {
+        let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
+        (0..nz as usize)
+            .map(|z| base + z)
+            .filter(|&i| {
+                solid.get(i)
+                    && (side_open
+                        || i == base
+                        || i + 1 == base + nz as usize
+                        || !solid.get(i - 1)
+                        || !solid.get(i + 1)
+                        || !solid.get(i - sx)
+                        || !solid.get(i + sx)
+                        || !solid.get(i - sy)
+                        || !solid.get(i + sy))
+            })
+            .map(|i| i as u32)
+            .collect()
+    })
+}
+
+/// The steps to the cells at Chebyshev distance exactly `r` (the surface of a (2r+1)³ cube).
+fn cube_ring(r: i32) -> impl Iterator<Item = [i32; 3]> {
+    (-r..=r).flat_map(move |x| {
+        (-r..=r).flat_map(move |y| {
+            (-r..=r).filter(move |&z| x.abs() == r || y.abs() == r || z.abs() == r).map(move |z| [x, y, z])
+        })
+    })
+}
+
+/// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with its distance².
+fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<(usize, f64)> {
+    candidates
+        .map(|t| (t, point_at(&tris[t], closest_point_barycentric(p, &tris[t])).distance_squared(p)))
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+}
+
+/// The colour and part of every visible cell: the material colour at the closest point of the nearest
+/// triangle (a shell triangle of the cell or its face neighbours; the BVH beyond that).
+fn surface_colors(
+    soup: &TriangleSoup,
+    spec: &GridSpec,
+    tris: &[GridTriangle],
+    shell: &Shell,
+    visible: &[u32],
+    bvh: &OnceLock<TriangleBvh>,
+) -> Vec<([u8; 4], u32)> {
+    visible
+        .par_iter()
+        .map(|&i| {
+            let i = i as usize;
+            let c = spec.coords(i);
+            let p = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
+            let tri = shell.nearest_of(i).map(|t| t as usize).or_else(|| {
+                // Shell triangles of the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
+                (1..=8)
+                    .find_map(|r| {
+                        let ring = cube_ring(r).filter_map(|step| spec.offset(i, step));
+                        let candidates: Vec<usize> = ring.filter_map(|j| shell.nearest_of(j)).map(|t| t as usize).collect();
+                        nearest_among(tris, p, candidates.into_iter()).map(|(t, _)| t)
+                    })
+                    .or_else(|| nearest_in_bvh(tris, bvh.get_or_init(|| TriangleBvh::build(tris)), p))
+            });
+            match tri {
+                Some(t) => (sample(soup, t, closest_point_barycentric(p, &tris[t])), soup.triangle_parts[t]),
+                None => ([255; 4], 0),
+            }
+        })
+        .collect()
+}
+
+/// The nearest triangle to `p` by BVH box queries of growing size.
+fn nearest_in_bvh(tris: &[GridTriangle], bvh: &TriangleBvh, p: DVec3) -> Option<usize> {
+    let mut r = 2.0f32;
+    for _ in 0..24 {
+        let c = Vec3A::from(p.as_vec3());
+        let mut found = Vec::new();
+        bvh.for_each_in_box(Aabb::new(c - r, c + r), |t| found.push(t));
+        if let Some((t, d2)) = nearest_among(tris, p, found.into_iter()) {
+            // Anything outside the box is farther than r; accept once the best lies within it.
+            if d2 <= f64::from(r * r) {
+                return Some(t);
+            }
+        }
+        r *= 2.0;
+    }
+    None
+}
+
+/// Builds the output voxels. An interior cell takes the colour of the nearer end of its solid run
+/// along z (both ends of a run are visible cells): cheap, parallel and deterministic.
+fn assemble(spec: &GridSpec, solid: &BitGrid, visible: &[u32], colors: &[([u8; 4], u32)], hollow: bool) -> Vec<Voxel> {
+    let voxel = |i: usize, (color, part): ([u8; 4], u32), visible: bool| Voxel {
+        cell: spec.coords(i).map(|c| c as u16),
+        color,
+        part,
+        visible,
+    };
+    if hollow {
+        return visible.par_iter().zip(colors).map(|(&i, &c)| voxel(i as usize, c, true)).collect();
+    }
+    let [nx, ny, nz] = spec.dims;
+    let nz = nz as usize;
+    // Size the output once and hand every column its own disjoint slice of it.
+    let counts: Vec<usize> =
+        (0..nx as usize * ny as usize).into_par_iter().map(|col| solid.count_range(col * nz..(col + 1) * nz)).collect();
+    let blank = Voxel { cell: [0; 3], color: [0; 4], part: 0, visible: false };
+    let mut voxels = vec![blank; counts.iter().sum()];
+    let mut rest = voxels.as_mut_slice();
+    let mut slices = Vec::with_capacity(counts.len());
+    for &n in &counts {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(n);
+        slices.push(head);
+        rest = tail;
+    }
+    slices.into_par_iter().enumerate().filter(|(_, s)| !s.is_empty()).for_each(|(col, out)| {
+        let base = col * nz;
+        let cell = |z: usize| [(col / ny as usize) as u16, (col % ny as usize) as u16, z as u16];
+        let mut next_visible = visible.partition_point(|&v| (v as usize) < base);
+        let mut written = 0;
+        let mut z = 0;
+        while z < nz {
+            if !solid.get(base + z) {
+                z += 1;
+                continue;
+            }
+            let start = z;
+            while z < nz && solid.get(base + z) {
+                z += 1;
+            }
+            // Both ends of the run are visible; interior cells copy the nearer end.
+            let run_first = next_visible;
+            let run_last = run_first + visible[run_first..].partition_point(|&v| (v as usize) < base + z) - 1;
+            for k in start..z {
+                let on_surface = next_visible < visible.len() && visible[next_visible] as usize == base + k;
+                let source = if on_surface {
+                    next_visible += 1;
+                    next_visible - 1
+                } else if k - start <= z - 1 - k {
+                    run_first
+                } else {
+                    run_last
+                };
+                let (color, part) = colors[source];
+                out[written] = Voxel { cell: cell(k), color, part, visible: on_surface };
+                written += 1;
+            }
+        }
+    });
+    voxels
+}
