@@ -22,7 +22,7 @@ fn column_center(spec: &GridSpec, col: usize) -> [f64; 2] {
 fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
     let first = (lo - 0.5).ceil().max(0.0);
     let last = (hi - 0.5).floor().min(f64::from(n) - 1.0);
-    if !(first <= last) {
+    if first.is_nan() || last.is_nan() || first > last {
         return 0..0;
     }
     first as u32..last as u32 + 1
@@ -84,7 +84,7 @@ pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &Tri
 /// its centre k + 0.5. Columns with an odd number of crossings only occur on open meshes; they are left
 /// empty (the surface shell still covers them) instead of being filled down to the grid's floor.
 fn column_runs(zs: &[f64], nz: u32) -> impl Iterator<Item = std::ops::Range<u32>> + '_ {
-    let usable = if zs.len() % 2 == 0 { zs } else { &[] };
+    let usable = if zs.len().is_multiple_of(2) { zs } else { &[] };
     let to_cell = move |z: f64| (z - 0.5).ceil().clamp(0.0, f64::from(nz)) as u32;
     usable.chunks_exact(2).map(move |pair| to_cell(pair[0])..to_cell(pair[1])).filter(|r| !r.is_empty())
 }

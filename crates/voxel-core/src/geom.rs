@@ -30,6 +30,10 @@ pub fn edge_side(u: DVec3, v: DVec3, p: [f64; 2]) -> bool {
 /// the perturbation they cover no point, so dropping them keeps the count consistent.
 #[inline]
 pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
+    let outside = |a: f64, b: f64, c: f64, q: f64| q < a.min(b).min(c) || q > a.max(b).max(c);
+    if outside(t[0].x, t[1].x, t[2].x, p[0]) || outside(t[0].y, t[1].y, t[2].y, p[1]) {
+        return false;
+    }
     let xy = |v: DVec3| Coord { x: v.x, y: v.y };
     if orient2d(xy(t[0]), xy(t[1]), xy(t[2])) == 0.0 {
         return false;
@@ -56,45 +60,58 @@ pub fn depth_at(t: &GridTriangle, p: [f64; 2]) -> f64 {
     z.clamp(a.z.min(b.z).min(c.z), a.z.max(b.z).max(c.z))
 }
 
-/// Triangle–axis-aligned-box overlap (separating axis test of Akenine-Möller), box given by centre and
-/// half size. Touching counts as overlapping.
+/// A triangle prepared for many box-overlap tests against unit cells (separating axis test of
+/// Akenine-Möller; the edges and normal are computed once).
+pub struct BoxTester {
+    v: [DVec3; 3],
+    edges: [DVec3; 3],
+    normal: DVec3,
+    /// n · v0: the plane offset.
+    plane: f64,
+}
+
+impl BoxTester {
+    /// Prepares triangle `t`.
+    pub fn new(t: &GridTriangle) -> Self {
+        let edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+        let normal = edges[0].cross(edges[1]);
+        Self { v: *t, edges, normal, plane: normal.dot(t[0]) }
+    }
+
+    /// Whether the triangle overlaps the box of half size `half` around `center` (touching counts).
+    pub fn overlaps(&self, center: DVec3, half: DVec3) -> bool {
+        let [v0, v1, v2] = self.v.map(|v| v - center);
+        // The box's own axes.
+        for a in 0..3 {
+            if v0[a].min(v1[a]).min(v2[a]) > half[a] || v0[a].max(v1[a]).max(v2[a]) < -half[a] {
+                return false;
+            }
+        }
+        // The triangle's plane.
+        let n = self.normal;
+        let r = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
+        if (self.plane - n.dot(center)).abs() > r {
+            return false;
+        }
+        // The nine edge × box-axis cross products, written out: for axis X and edge e the separating
+        // direction is (0, −e.z, e.y), and so on.
+        let separated = |p: [f64; 3], r: f64| p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r;
+        for e in self.edges {
+            let (ax, ay, az) = (e.x.abs(), e.y.abs(), e.z.abs());
+            if separated([v0, v1, v2].map(|v| -e.z * v.y + e.y * v.z), half.y * az + half.z * ay)
+                || separated([v0, v1, v2].map(|v| e.z * v.x - e.x * v.z), half.x * az + half.z * ax)
+                || separated([v0, v1, v2].map(|v| -e.y * v.x + e.x * v.y), half.x * ay + half.y * ax)
+            {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// Triangle–axis-aligned-box overlap, box given by centre and half size; touching counts as overlapping.
 pub fn triangle_box_overlap(center: DVec3, half: DVec3, t: &GridTriangle) -> bool {
-    let v0 = t[0] - center;
-    let v1 = t[1] - center;
-    let v2 = t[2] - center;
-    // The box's own axes.
-    for a in 0..3 {
-        let lo = v0[a].min(v1[a]).min(v2[a]);
-        let hi = v0[a].max(v1[a]).max(v2[a]);
-        if lo > half[a] || hi < -half[a] {
-            return false;
-        }
-    }
-    let e0 = v1 - v0;
-    let e1 = v2 - v1;
-    let e2 = v0 - v2;
-    // The nine edge × box-axis cross products, written out: for axis X and edge e the separating
-    // direction is (0, −e.z, e.y), and so on.
-    let separated = |p: [f64; 3], r: f64| p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r;
-    for e in [e0, e1, e2] {
-        let (ax, ay, az) = (e.x.abs(), e.y.abs(), e.z.abs());
-        let proj_x = [v0, v1, v2].map(|v| -e.z * v.y + e.y * v.z);
-        if separated(proj_x, half.y * az + half.z * ay) {
-            return false;
-        }
-        let proj_y = [v0, v1, v2].map(|v| e.z * v.x - e.x * v.z);
-        if separated(proj_y, half.x * az + half.z * ax) {
-            return false;
-        }
-        let proj_z = [v0, v1, v2].map(|v| -e.y * v.x + e.x * v.y);
-        if separated(proj_z, half.x * ay + half.y * ax) {
-            return false;
-        }
-    }
-    // The triangle's plane.
-    let n = e0.cross(e1);
-    let r = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
-    n.dot(v0).abs() <= r
+    BoxTester::new(t).overlaps(center, half)
 }
 
 /// The closest point of triangle `t` to `p`, as barycentric weights of its corners (Ericson, RTCD 5.1.5).

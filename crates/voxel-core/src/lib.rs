@@ -14,6 +14,7 @@ pub mod geom;
 pub mod grid;
 pub mod import;
 mod shell;
+pub mod shapes;
 pub mod soup;
 pub mod vox;
 pub mod voxelize;

@@ -4,25 +4,29 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::geom::{GridTriangle, closest_point_barycentric, point_at, triangle_box_overlap};
+use crate::geom::{BoxTester, GridTriangle};
 use crate::grid::{BitGrid, GridSpec};
 
-/// Shell cells, ascending by linear index, with per-cell data.
+/// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
 #[derive(Debug, Default)]
 pub(crate) struct Shell {
     /// Linear indices of the cells any triangle overlaps.
     pub cells: Vec<u32>,
-    /// For each cell, the overlapping triangle closest to the cell centre.
-    pub nearest: Vec<u32>,
+    /// `tris[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
+    offsets: Vec<u32>,
+    tris: Vec<u32>,
     /// For each cell, whether a thin piece of surface passes through it: a triangle overlaps it while
     /// neither the cell nor its neighbours on either side along the triangle's normal are filled.
     pub thin: Vec<bool>,
 }
 
 impl Shell {
-    /// The nearest triangle of shell cell `index`, if it is one.
-    pub fn nearest_of(&self, index: usize) -> Option<u32> {
-        self.cells.binary_search(&(index as u32)).ok().map(|k| self.nearest[k])
+    /// The triangles overlapping cell `index` (empty when it is not a shell cell).
+    pub fn triangles_of(&self, index: usize) -> &[u32] {
+        match self.cells.binary_search(&(index as u32)) {
+            Ok(k) => &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize],
+            Err(_) => &[],
+        }
     }
 }
 
@@ -33,10 +37,9 @@ fn normal_step(n: DVec3) -> [i32; 3] {
     [n.x, n.y, n.z].map(|c| if c.abs() >= 0.5 * m { c.signum() as i32 } else { 0 })
 }
 
-/// One (cell, triangle) overlap packed for sorting: cell, then distance² (f32 bits, which order like the
-/// non-negative floats), then triangle, then the thin flag — a total order, so the result is deterministic.
-fn pack(cell: usize, dist2: f32, tri: u32, thin: bool) -> u128 {
-    (cell as u128) << 96 | u128::from(dist2.to_bits()) << 64 | u128::from(tri) << 32 | u128::from(thin)
+/// One (cell, triangle) overlap packed for sorting: cell, then triangle, then the thin flag.
+fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
+    (cell as u64) << 32 | (tri as u64) << 1 | u64::from(thin)
 }
 
 /// Whether the cell at `c + step` exists and is filled.
@@ -54,10 +57,10 @@ fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bo
 
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Vec<u128>) {
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Vec<u64>) {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
-    if !(n.length_squared() > 0.0) {
+    if n.length_squared() <= 0.0 || n.is_nan() {
         return; // zero-area triangles add no surface
     }
     let step = normal_step(n);
@@ -65,16 +68,17 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let lo = t[0].min(t[1]).min(t[2]);
     let hi = t[0].max(t[1]).max(t[2]);
     let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
-    let cell_of = |a: usize, v: f64| v.floor().clamp(0.0, last(a)) as u32;
+    // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
+    let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
+    let tester = BoxTester::new(t);
     let mut emit = |c: [u32; 3], exact: bool| {
         let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-        if !exact && !triangle_box_overlap(center, DVec3::splat(0.5), t) {
+        if !exact && !tester.overlaps(center, DVec3::splat(0.5)) {
             return;
         }
         let index = spec.index(c[0], c[1], c[2]);
         let thin = !fill.get(index) && !filled_at(spec, fill, c, step) && !filled_at(spec, fill, c, back);
-        let dist2 = point_at(t, closest_point_barycentric(center, t)).distance_squared(center) as f32;
-        out.push(pack(index, dist2, tri as u32, thin));
+        out.push(pack(index, tri, thin));
     };
     let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
     if lo_cell == [0, 1, 2].map(|a| cell_of(a, hi[a])) {
@@ -113,7 +117,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
 
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let mut pairs: Vec<u128> = (0..tris.len())
+    let mut pairs: Vec<u64> = (0..tris.len())
         .into_par_iter()
         .fold(Vec::new, |mut out, tri| {
             overlaps(spec, tris, tri, fill, &mut out);
@@ -124,18 +128,23 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
             a
         });
     pairs.par_sort_unstable();
-    let mut shell = Shell::default();
+    // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
+    let mut shell = Shell { offsets: vec![0], tris: Vec::with_capacity(pairs.len()), ..Shell::default() };
     for p in pairs {
-        let (cell, tri, thin) = ((p >> 96) as u32, (p >> 32) as u32, p & 1 == 1);
-        if shell.cells.last() == Some(&cell) {
-            let last = shell.thin.len() - 1;
-            shell.thin[last] |= thin;
-        } else {
-            shell.cells.push(cell);
-            shell.nearest.push(tri);
-            shell.thin.push(thin);
+        let (cell, tri, thin) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
+        match shell.cells.last() {
+            Some(&last) if last == cell => *shell.thin.last_mut().expect("a cell has a flag") |= thin,
+            previous => {
+                if previous.is_some() {
+                    shell.offsets.push(shell.tris.len() as u32);
+                }
+                shell.cells.push(cell);
+                shell.thin.push(thin);
+            }
         }
+        shell.tris.push(tri);
     }
+    shell.offsets.push(shell.tris.len() as u32);
     shell
 }
 

@@ -152,14 +152,20 @@ impl TriangleSoup {
     }
 
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.
-    pub fn from_indexed(positions: &[[f32; 3]], triangles: &[[u32; 3]], base_color: [f32; 4]) -> Self {
+    pub fn from_mesh(mesh: &crate::shapes::IndexedMesh, base_color: [f32; 4]) -> Self {
         let mut soup = Self::default();
-        let material = soup.add_material(Material { base_color, texture: None });
-        let part = soup.add_part(material, "mesh");
-        for t in triangles {
-            soup.push_triangle(part, t.map(|i| Vertex::at(positions[i as usize])));
-        }
+        soup.add_mesh(mesh, base_color, "mesh");
         soup
+    }
+
+    /// Adds an indexed mesh as a new part with its own flat linear-RGBA material; returns the part.
+    pub fn add_mesh(&mut self, mesh: &crate::shapes::IndexedMesh, base_color: [f32; 4], name: &str) -> u32 {
+        let material = self.add_material(Material { base_color, texture: None });
+        let part = self.add_part(material, name);
+        for t in &mesh.triangles {
+            self.push_triangle(part, t.map(|i| Vertex::at(mesh.positions[i as usize])));
+        }
+        part
     }
 
     /// The number of triangles.

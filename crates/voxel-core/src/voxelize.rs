@@ -254,6 +254,9 @@ fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
     })
 }
 
+/// The steps to the six face neighbours.
+const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]];
+
 /// The steps to the cells at Chebyshev distance exactly `r` (the surface of a (2r+1)³ cube).
 fn cube_ring(r: i32) -> impl Iterator<Item = [i32; 3]> {
     (-r..=r).flat_map(move |x| {
@@ -286,13 +289,16 @@ fn surface_colors(
             let i = i as usize;
             let c = spec.coords(i);
             let p = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-            let tri = shell.nearest_of(i).map(|t| t as usize).or_else(|| {
-                // Shell triangles of the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
-                (1..=8)
+            let own = shell.triangles_of(i);
+            let tri = nearest_among(tris, p, own.iter().map(|&t| t as usize)).map(|(t, _)| t).or_else(|| {
+                // Shell triangles of the face neighbours (where the surface crossing a face lies), then of
+                // the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
+                (0..=8)
                     .find_map(|r| {
-                        let ring = cube_ring(r).filter_map(|step| spec.offset(i, step));
-                        let candidates: Vec<usize> = ring.filter_map(|j| shell.nearest_of(j)).map(|t| t as usize).collect();
-                        nearest_among(tris, p, candidates.into_iter()).map(|(t, _)| t)
+                        let steps: Box<dyn Iterator<Item = [i32; 3]>> = if r == 0 { Box::new(FACE_STEPS.into_iter()) } else { Box::new(cube_ring(r)) };
+                        let ring = steps.filter_map(|step| spec.offset(i, step));
+                        let candidates = ring.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize));
+                        nearest_among(tris, p, candidates).map(|(t, _)| t)
                     })
                     .or_else(|| nearest_in_bvh(tris, bvh.get_or_init(|| TriangleBvh::build(tris)), p))
             });

@@ -1,0 +1,100 @@
+//! Shared helpers: model paths resolved at run time, hand-built GLB files.
+
+use std::collections::HashSet;
+use std::path::PathBuf;
+
+use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
+
+/// The folder of third-party test models, or `None` (with the reason printed) when absent.
+/// `VOXEL_ART_MODELS` overrides the default `../shared/models` next to the repository.
+pub fn models_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("VOXEL_ART_MODELS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        println!("skipped: test models not found at {} (set VOXEL_ART_MODELS)", dir.display());
+        None
+    }
+}
+
+/// A model of the corpus by relative path, or `None` when the corpus is absent.
+pub fn model(relative: &str) -> Option<PathBuf> {
+    models_dir().map(|d| d.join(relative))
+}
+
+/// Options at resolution `r`, defaults otherwise.
+pub fn at_resolution(r: u32) -> VoxelizeOptions {
+    VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() }
+}
+
+/// The set of filled cells of a model.
+pub fn cells(model: &VoxelModel) -> HashSet<[u16; 3]> {
+    model.voxels.iter().map(|v| v.cell).collect()
+}
+
+/// Packs a JSON document and a binary chunk into a .glb.
+pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut json_bytes = serde_json::to_vec(json).unwrap();
+    while !json_bytes.len().is_multiple_of(4) {
+        json_bytes.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json_bytes);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
+    out
+}
+
+/// A unit cube (8 positions, 36 u16 indices) as little-endian bytes, positions first.
+pub fn cube_buffer() -> (Vec<u8>, usize, usize) {
+    let mesh = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
+    let mut bin = Vec::new();
+    for p in &mesh.positions {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let positions_len = bin.len();
+    for t in &mesh.triangles {
+        for &i in t {
+            bin.extend_from_slice(&(i as u16).to_le_bytes());
+        }
+    }
+    (bin, positions_len, mesh.triangles.len() * 3)
+}
+
+/// A glTF document of one cube mesh on one node; tests mutate it to make it hostile.
+pub fn cube_document(bin_len: usize, positions_len: usize, index_count: usize) -> serde_json::Value {
+    serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.2, 0.2, 1.0]}}],
+        "buffers": [{"byteLength": bin_len}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": positions_len},
+            {"buffer": 0, "byteOffset": positions_len, "byteLength": index_count * 2}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]},
+            {"bufferView": 1, "componentType": 5123, "count": index_count, "type": "SCALAR"}
+        ]
+    })
+}

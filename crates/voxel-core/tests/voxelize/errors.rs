@@ -1,0 +1,196 @@
+//! Hostile input: every case is a clear error, never a panic or a hang. Also the import paths that must work
+//! (quantized positions, data URIs, strips).
+
+use voxel_core::{GridSize, VoxelError, VoxelizeOptions, load_file, load_slice, voxelize};
+
+use crate::common::{cube_buffer, cube_document, glb, model};
+
+fn load_err(bytes: &[u8]) -> String {
+    match load_slice(bytes, None) {
+        Ok(_) => panic!("loaded without error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn cube_glb(edit: impl FnOnce(&mut serde_json::Value, &mut Vec<u8>)) -> Vec<u8> {
+    let (mut bin, positions_len, index_count) = cube_buffer();
+    let mut doc = cube_document(bin.len(), positions_len, index_count);
+    edit(&mut doc, &mut bin);
+    glb(&doc, &bin)
+}
+
+#[test]
+fn the_hand_built_cube_loads() {
+    let soup = load_slice(&cube_glb(|_, _| {}), None).unwrap();
+    assert_eq!(soup.triangle_count(), 12);
+    let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(10), ..Default::default() }).unwrap();
+    assert_eq!(m.voxels.len(), 1000);
+}
+
+#[test]
+fn a_missing_file_names_the_path() {
+    let err = load_file("/no/such/model.glb".as_ref()).unwrap_err();
+    assert!(matches!(err, VoxelError::Io { .. }));
+    assert!(err.to_string().contains("/no/such/model.glb"), "{err}");
+}
+
+#[test]
+fn truncated_and_random_bytes_are_parse_errors() {
+    let full = cube_glb(|_, _| {});
+    for cut in [0, 7, 20, full.len() / 2, full.len() - 3] {
+        let err = load_err(&full[..cut]);
+        assert!(err.contains("not a valid glTF") || err.contains("missing"), "cut {cut}: {err}");
+    }
+    let mut state = 0x2545_f491_u32;
+    let noise: Vec<u8> = (0..4096)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as u8
+        })
+        .collect();
+    assert!(load_err(&noise).contains("not a valid glTF"));
+    assert!(load_err(b"{\"asset\": 3}").contains("not a valid glTF"));
+}
+
+#[test]
+fn undecodable_required_extensions_are_named() {
+    for ext in ["KHR_draco_mesh_compression", "EXT_meshopt_compression"] {
+        let err = load_err(&cube_glb(|doc, _| doc["extensionsRequired"] = serde_json::json!([ext])));
+        assert!(err.contains(ext), "{err}");
+    }
+    if let Some(path) = model("khronos-cesiummilktruck-draco/CesiumMilkTruck.gltf") {
+        let err = load_file(&path).unwrap_err().to_string();
+        assert!(err.contains("KHR_draco_mesh_compression"), "{err}");
+    }
+    if let Some(path) = model("khronos-duck-meshopt-quantized.glb") {
+        let err = load_file(&path).unwrap_err().to_string();
+        assert!(err.contains("EXT_meshopt_compression"), "{err}");
+    }
+}
+
+#[test]
+fn an_empty_scene_has_no_triangles() {
+    let err = load_err(&cube_glb(|doc, _| doc["scenes"] = serde_json::json!([{"nodes": []}])));
+    assert!(err.contains("no triangles"), "{err}");
+    // Points only: nothing to voxelize either.
+    let err = load_err(&cube_glb(|doc, _| doc["meshes"][0]["primitives"][0]["mode"] = serde_json::json!(0)));
+    assert!(err.contains("no triangles"), "{err}");
+}
+
+#[test]
+fn nan_positions_are_refused() {
+    let err = load_err(&cube_glb(|_, bin| bin[0..4].copy_from_slice(&f32::NAN.to_le_bytes())));
+    assert!(err.contains("NaN"), "{err}");
+    let err = load_err(&cube_glb(|_, bin| bin[4..8].copy_from_slice(&f32::INFINITY.to_le_bytes())));
+    assert!(err.contains("non-finite"), "{err}");
+}
+
+#[test]
+fn out_of_range_indices_are_refused() {
+    let err = load_err(&cube_glb(|_, bin| {
+        let at = bin.len() - 2;
+        bin[at..].copy_from_slice(&500u16.to_le_bytes());
+    }));
+    assert!(err.contains("vertex index 500 is out of range"), "{err}");
+    // An accessor running past its buffer view.
+    let err = load_err(&cube_glb(|doc, _| doc["accessors"][0]["count"] = serde_json::json!(9999)));
+    assert!(err.contains("do not fit") || err.contains("invalid"), "{err}");
+    // A reference to a node that does not exist.
+    let err = load_err(&cube_glb(|doc, _| doc["scenes"][0]["nodes"] = serde_json::json!([7])));
+    assert!(err.contains("invalid model"), "{err}");
+}
+
+#[test]
+fn a_node_that_is_its_own_ancestor_is_refused() {
+    let err = load_err(&cube_glb(|doc, _| {
+        doc["nodes"] = serde_json::json!([{"mesh": 0, "children": [1]}, {"children": [0]}]);
+    }));
+    assert!(err.contains("own ancestor"), "{err}");
+    let err = load_err(&cube_glb(|doc, _| doc["nodes"] = serde_json::json!([{"mesh": 0, "children": [0]}])));
+    assert!(err.contains("own ancestor"), "{err}");
+}
+
+#[test]
+fn missing_buffers_are_named() {
+    let err = load_err(&cube_glb(|doc, _| doc["buffers"][0]["uri"] = serde_json::json!("missing.bin")));
+    assert!(err.contains("missing or unreadable data"), "{err}");
+}
+
+#[test]
+fn degenerate_meshes_and_absurd_grids_are_errors() {
+    // Every triangle collapsed onto one point.
+    let err = load_slice(&cube_glb(|_, bin| {
+        for v in 0..8 {
+            bin[v * 12..v * 12 + 12].copy_from_slice(&[0u8; 12]);
+        }
+    }), None)
+    .and_then(|soup| voxelize(&soup, &VoxelizeOptions::default()))
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("no triangles") || err.contains("coincide") || err.contains("zero area"), "{err}");
+    let soup = load_slice(&cube_glb(|_, _| {}), None).unwrap();
+    let err = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(60_000), ..Default::default() }).unwrap_err();
+    assert!(matches!(err, VoxelError::GridTooLarge { .. }), "{err}");
+    let err = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Cell(-1.0), ..Default::default() }).unwrap_err();
+    assert!(err.to_string().contains("grid size must be positive"), "{err}");
+}
+
+#[test]
+fn quantized_positions_with_a_dequantizing_node_scale_load() {
+    // KHR_mesh_quantization: normalized i16 positions (0 or 32767) and a node scale of 2.
+    let mesh = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
+    let mut bin = Vec::new();
+    for p in &mesh.positions {
+        for c in p {
+            bin.extend_from_slice(&((c * 32767.0) as i16).to_le_bytes());
+        }
+        bin.extend_from_slice(&[0, 0]); // pad each element to 4-byte alignment
+    }
+    let positions_len = bin.len();
+    for t in &mesh.triangles {
+        for &i in t {
+            bin.extend_from_slice(&(i as u16).to_le_bytes());
+        }
+    }
+    let mut doc = cube_document(bin.len(), positions_len, 36);
+    doc["extensionsUsed"] = serde_json::json!(["KHR_mesh_quantization"]);
+    doc["extensionsRequired"] = serde_json::json!(["KHR_mesh_quantization"]);
+    doc["nodes"][0]["scale"] = serde_json::json!([2.0, 2.0, 2.0]);
+    doc["bufferViews"][0]["byteStride"] = serde_json::json!(8);
+    doc["accessors"][0]["componentType"] = serde_json::json!(5122);
+    doc["accessors"][0]["normalized"] = serde_json::json!(true);
+    let soup = load_slice(&glb(&doc, &bin), None).unwrap();
+    let (lo, hi) = soup.bounds().unwrap();
+    assert_eq!(lo, [0.0; 3]);
+    assert_eq!(hi, [2.0; 3]);
+    let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(8), ..Default::default() }).unwrap();
+    assert_eq!(m.voxels.len(), 512);
+}
+
+#[test]
+fn data_uri_buffers_and_triangle_strips_load() {
+    use base64::Engine as _;
+    // A unit square as a 4-vertex strip in a .gltf whose buffer is a data URI.
+    let mut bin = Vec::new();
+    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 1.0]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 5}]}],
+        "buffers": [{"byteLength": bin.len(), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": bin.len()}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]}]
+    });
+    let soup = load_slice(&serde_json::to_vec(&doc).unwrap(), None).unwrap();
+    assert_eq!(soup.triangle_count(), 2);
+    let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(10), ..Default::default() }).unwrap();
+    assert_eq!(m.voxels.len(), 100);
+}

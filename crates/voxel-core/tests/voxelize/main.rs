@@ -1,0 +1,8 @@
+//! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
+//! hostile input and .vox export. One test binary.
+
+mod common;
+mod corpus;
+mod errors;
+mod export;
+mod shapes;

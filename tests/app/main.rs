@@ -1,0 +1,4 @@
+//! Integration tests of the voxel-art binary and app (one test binary).
+
+mod cli;
+mod common;
