@@ -2,3 +2,6 @@
 
 mod cli;
 mod common;
+mod harness;
+mod logic;
+mod render;

@@ -11,6 +11,7 @@ pub mod color;
 pub mod error;
 mod fill;
 pub mod geom;
+pub mod glb;
 pub mod grid;
 pub mod import;
 mod shell;

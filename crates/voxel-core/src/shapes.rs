@@ -23,6 +23,15 @@ impl IndexedMesh {
         self
     }
 
+    /// Rotates every vertex about `axis` (through the origin) by `angle` radians.
+    pub fn rotated(mut self, axis: [f32; 3], angle: f32) -> Self {
+        let q = glam::Quat::from_axis_angle(glam::Vec3::from(axis).normalize(), angle);
+        for p in &mut self.positions {
+            *p = (q * glam::Vec3::from(*p)).to_array();
+        }
+        self
+    }
+
     /// Scales every vertex by `factor` per axis.
     pub fn scaled(mut self, factor: [f32; 3]) -> Self {
         for p in &mut self.positions {
@@ -67,6 +76,40 @@ pub fn uv_sphere(radius: f32, rings: u32) -> IndexedMesh {
         for j in 0..sectors {
             triangles.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
             triangles.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    IndexedMesh { positions, triangles }
+}
+
+/// The upper half of a sphere of `radius` (dome over the xz plane). With `closed`, a flat disc closes its
+/// base; without, it is an open shell.
+pub fn dome(radius: f32, rings: u32, closed: bool) -> IndexedMesh {
+    let rings = rings.max(2);
+    let sectors = 4 * rings;
+    let mut positions = vec![[0.0, radius, 0.0]];
+    for i in 1..=rings {
+        let theta = PI / 2.0 * i as f32 / rings as f32;
+        for j in 0..sectors {
+            let phi = TAU * j as f32 / sectors as f32;
+            positions.push([radius * theta.sin() * phi.cos(), radius * theta.cos(), radius * theta.sin() * phi.sin()]);
+        }
+    }
+    let at = |i: u32, j: u32| 1 + (i - 1) * sectors + j % sectors;
+    let mut triangles = Vec::new();
+    for j in 0..sectors {
+        triangles.push([0, at(1, j + 1), at(1, j)]);
+    }
+    for i in 1..rings {
+        for j in 0..sectors {
+            triangles.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            triangles.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    if closed {
+        positions.push([0.0; 3]);
+        let centre = positions.len() as u32 - 1;
+        for j in 0..sectors {
+            triangles.push([centre, at(rings, j), at(rings, j + 1)]);
         }
     }
     IndexedMesh { positions, triangles }
@@ -140,5 +183,6 @@ mod tests {
         assert_closed(&uv_sphere(1.0, 8));
         assert_closed(&torus(2.0, 0.5, 16));
         assert_closed(&cylinder(1.0, 0.0, 2.0, 12));
+        assert_closed(&dome(1.0, 6, true));
     }
 }

@@ -1,0 +1,223 @@
+//! The voxel pool: one entity per voxel, all sharing one mesh and one material (one batch), each voxel's
+//! colour packed in its `MeshTag`. The pool grows to the largest model shown and hides its spares. While no
+//! model is ready, random pastel boxes float in its place.
+
+pub mod material;
+pub mod mesh;
+
+use bevy::color::Hsla;
+use bevy::mesh::MeshTag;
+use bevy::prelude::*;
+
+pub use material::{VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
+
+use crate::AppSystems;
+use crate::library::{ModelLibrary, ModelStatus};
+use crate::rng::Rng;
+use crate::settings::VoxelSettings;
+use crate::voxelize::VoxelModel;
+
+/// The shared mesh and material of every voxel.
+#[derive(Resource, Debug, Clone)]
+pub struct VoxelAssets {
+    /// The voxel shape (rounded box).
+    pub mesh: Handle<Mesh>,
+    /// The one material.
+    pub material: Handle<VoxelMaterial>,
+}
+
+/// The parent of every voxel (spinning it spins the model).
+#[derive(Component, Debug, Default, Reflect)]
+pub struct VoxelCloud;
+
+/// A voxel entity and its index in the pool.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
+pub struct VoxelSlot(pub u32);
+
+/// The pool's bookkeeping.
+#[derive(Resource, Debug, Default)]
+pub struct VoxelPool {
+    /// Voxel entities, by slot.
+    pub slots: Vec<Entity>,
+    /// Slots in use (the rest are hidden).
+    pub visible: usize,
+    /// The model laid out now, if any (none: placeholder boxes).
+    pub shown: Option<AssetId<VoxelModel>>,
+    /// The cloud entity.
+    pub cloud: Option<Entity>,
+}
+
+/// Where one voxel of a model goes: centre in cloud space, scale and colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelTarget {
+    /// Cell centre.
+    pub position: Vec3,
+    /// Box scale (cell size × box size).
+    pub scale: Vec3,
+    /// sRGB RGBA8.
+    pub color: [u8; 4],
+}
+
+/// The voxel layout of `model` with boxes `box_size` of a cell.
+pub fn targets_for(model: &voxel_core::VoxelModel, box_size: f32) -> Vec<VoxelTarget> {
+    let scale = Vec3::from(model.spec.cell) * box_size;
+    model
+        .voxels
+        .iter()
+        .map(|v| VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color })
+        .collect()
+}
+
+/// Number of placeholder boxes shown before any model is ready.
+pub const PLACEHOLDER_COUNT: usize = 240;
+
+/// Random pastel boxes around the origin (the article's start-up state).
+pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
+    let mut rng = Rng::new(seed);
+    let cell = 0.24;
+    (0..count)
+        .map(|_| {
+            let mut coord = || ((rng.f32() - 0.5) * 6.0 / cell).round() * cell;
+            let position = Vec3::new(coord(), coord(), coord());
+            let color = Color::from(Hsla::new(rng.f32() * 360.0, 0.8, 0.8, 1.0)).to_srgba().to_u8_array();
+            VoxelTarget { position, scale: Vec3::splat(cell), color }
+        })
+        .collect()
+}
+
+fn voxel_bundle(assets: &VoxelAssets, slot: u32, cloud: Entity) -> impl Bundle {
+    (
+        Name::new("voxel"),
+        VoxelSlot(slot),
+        Mesh3d(assets.mesh.clone()),
+        MeshMaterial3d(assets.material.clone()),
+        MeshTag(0),
+        Transform::default(),
+        Visibility::Hidden,
+        ChildOf(cloud),
+    )
+}
+
+/// Makes sure the pool has at least `count` slots.
+pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, assets: &VoxelAssets, count: usize) {
+    let Some(cloud) = pool.cloud else { return };
+    while pool.slots.len() < count {
+        let slot = pool.slots.len() as u32;
+        pool.slots.push(commands.spawn(voxel_bundle(assets, slot, cloud)).id());
+    }
+}
+
+fn setup(
+    mut commands: Commands,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<VoxelMaterial>>,
+    settings: Res<VoxelSettings>,
+    mut pool: ResMut<VoxelPool>,
+) {
+    let assets = VoxelAssets {
+        mesh: meshes.add(mesh::rounded_box(settings.roundness, 2)),
+        material: materials.add(voxel_material()),
+    };
+    pool.cloud = Some(commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible)).id());
+    grow_pool(&mut commands, &mut pool, &assets, PLACEHOLDER_COUNT);
+    commands.insert_resource(assets);
+}
+
+/// Lays the voxels out for `targets` at once: slot i takes target i, the rest are hidden.
+pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], voxels: &mut Query<(&VoxelSlot, &mut Transform, &mut MeshTag, &mut Visibility)>) {
+    for (slot, mut transform, mut tag, mut visibility) in voxels.iter_mut() {
+        match targets.get(slot.0 as usize) {
+            Some(t) => {
+                *transform = Transform::from_translation(t.position).with_scale(t.scale);
+                tag.0 = pack_color(t.color);
+                visibility.set_if_neq(Visibility::Inherited);
+            }
+            None => {
+                visibility.set_if_neq(Visibility::Hidden);
+            }
+        }
+    }
+    pool.visible = targets.len().min(pool.slots.len());
+}
+
+/// Grows the pool for the model to show.
+fn grow_for_current(mut commands: Commands, mut pool: ResMut<VoxelPool>, assets: Option<Res<VoxelAssets>>, library: Res<ModelLibrary>, models: Res<Assets<VoxelModel>>) {
+    let Some(assets) = assets else { return };
+    let needed = library
+        .current_entry()
+        .filter(|e| e.status == ModelStatus::Ready)
+        .and_then(|e| e.voxels.as_ref())
+        .and_then(|h| models.get(h))
+        .map_or(0, |m| m.0.voxels.len());
+    if needed > pool.slots.len() {
+        grow_pool(&mut commands, &mut pool, &assets, needed);
+    }
+}
+
+/// Shows the current model (instantly) once its voxels are ready and the pool is big enough; shows the
+/// placeholder until then.
+fn show_current(
+    mut pool: ResMut<VoxelPool>,
+    library: Res<ModelLibrary>,
+    models: Res<Assets<VoxelModel>>,
+    settings: Res<VoxelSettings>,
+    mut voxels: Query<(&VoxelSlot, &mut Transform, &mut MeshTag, &mut Visibility)>,
+    mut placeholder_shown: Local<bool>,
+    mut last_box_size: Local<f32>,
+) {
+    let wanted = library.current_entry().filter(|e| e.status == ModelStatus::Ready).and_then(|e| e.voxels.as_ref());
+    match wanted.and_then(|h| models.get(h).map(|m| (h.id(), m))) {
+        Some((id, model)) => {
+            let spawned = voxels.iter().len();
+            let changed = pool.shown != Some(id) || *last_box_size != settings.box_size;
+            if changed && spawned >= model.0.voxels.len() {
+                apply_targets(&mut pool, &targets_for(&model.0, settings.box_size), &mut voxels);
+                pool.shown = Some(id);
+                *last_box_size = settings.box_size;
+                *placeholder_shown = false;
+            }
+        }
+        None if pool.shown.is_none() && !*placeholder_shown && voxels.iter().len() >= PLACEHOLDER_COUNT => {
+            apply_targets(&mut pool, &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed), &mut voxels);
+            *placeholder_shown = true;
+        }
+        None => {}
+    }
+}
+
+/// Placeholder boxes bob gently while nothing is voxelized yet.
+fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&VoxelSlot, &mut Transform)>) {
+    if pool.shown.is_some() {
+        return;
+    }
+    let t = time.elapsed_secs();
+    for (slot, mut transform) in &mut voxels {
+        let phase = slot.0 as f32 * 0.7;
+        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+    }
+}
+
+/// Rebuilds the voxel mesh when the roundness changes.
+fn update_mesh(settings: Res<VoxelSettings>, assets: Option<Res<VoxelAssets>>, mut meshes: ResMut<Assets<Mesh>>, mut last: Local<Option<f32>>) {
+    let Some(assets) = assets else { return };
+    if last.is_some_and(|r| r != settings.roundness) {
+        let _ = meshes.insert(&assets.mesh, mesh::rounded_box(settings.roundness, 2));
+    }
+    *last = Some(settings.roundness);
+}
+
+/// Logic: the pool and its layout (no GPU needed).
+pub(super) fn plugin(app: &mut App) {
+    if !app.world().contains_resource::<Assets<VoxelMaterial>>() {
+        app.init_asset::<VoxelMaterial>();
+    }
+    app.init_resource::<VoxelPool>();
+    app.register_type::<VoxelSlot>().register_type::<VoxelCloud>();
+    app.add_systems(Startup, setup);
+    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate), (show_current, update_mesh).in_set(AppSystems::Sync)));
+}
+
+/// Rendering: the material's pipeline.
+pub(super) fn render_plugin(app: &mut App) {
+    app.add_plugins(MaterialPlugin::<VoxelMaterial>::default());
+}

@@ -1,0 +1,158 @@
+//! `--screenshot out.png --frames N`: once the first model shows, run N more frames, save the window to a
+//! PNG and exit (status 0), or exit with status 1 if no model ever shows. Next to the PNG, `out.png.json`
+//! names where the camera projects the points a test checks: the floor under the model (in its shadow), the
+//! floor far from it, the background, and the model's most common voxel colour.
+
+use std::path::{Path, PathBuf};
+
+use bevy::prelude::*;
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
+
+use crate::args::AppArgs;
+use crate::camera::MainCamera;
+use crate::instancing::VoxelPool;
+use crate::library::ModelLibrary;
+use crate::stage::{Floor, KeyLight};
+use crate::voxelize::VoxelModel;
+
+/// Frames allowed for the first model to appear before giving up.
+const MAX_WAIT_FRAMES: u32 = 3_000;
+
+#[derive(Default)]
+struct Progress {
+    waited: u32,
+    shown_frames: u32,
+    requested: bool,
+}
+
+/// Screen points (logical pixels) a screenshot test checks.
+#[derive(serde::Serialize, Debug, Default)]
+pub struct ScreenshotProbe {
+    /// The floor where the model's shadow falls.
+    pub shadow: Option<[f32; 2]>,
+    /// The floor far from the model.
+    pub floor_far: Option<[f32; 2]>,
+    /// Background near the top of the window.
+    pub background_top: [f32; 2],
+    /// Background lower down.
+    pub background_low: [f32; 2],
+    /// The most common voxel colour of the shown model (sRGB).
+    pub model_color: Option<[u8; 3]>,
+}
+
+/// Whether the segment from `from` to `to` passes within `radius` of any of `centers`.
+fn blocked(from: Vec3, to: Vec3, centers: &[Vec3], radius: f32) -> bool {
+    let d = to - from;
+    let len2 = d.length_squared().max(1e-12);
+    centers.iter().any(|c| {
+        let t = ((*c - from).dot(d) / len2).clamp(0.0, 1.0);
+        (from + d * t).distance_squared(*c) < radius * radius
+    })
+}
+
+fn probe(
+    camera: &Camera,
+    camera_transform: &GlobalTransform,
+    light: &GlobalTransform,
+    floor_y: f32,
+    model: Option<&VoxelModel>,
+    window: Vec2,
+) -> ScreenshotProbe {
+    let on_screen = |p: Vec3| {
+        camera.world_to_viewport(camera_transform, p).ok().filter(|s| s.x > 300.0 && s.x < window.x - 160.0 && s.y > 10.0 && s.y < window.y - 10.0)
+    };
+    let eye = camera_transform.translation();
+    let (centers, radius) = model.map_or((Vec::new(), 0.0), |m| {
+        let cell = Vec3::from(m.0.spec.cell);
+        (m.0.voxels.iter().map(|v| Vec3::from(m.0.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
+    });
+    // Every voxel centre's shadow on the floor, along the light's direction.
+    let dir = light.forward().as_vec3();
+    let shadows: Vec<Vec3> = if dir.y < -1e-3 { centers.iter().map(|c| *c + dir * ((floor_y - c.y) / dir.y)).collect() } else { Vec::new() };
+    let lit_visible = |p: Vec3| !blocked(p + Vec3::Y * 0.01, eye, &centers, radius);
+    // The floor point deepest in the shadow (most voxel shadows around it) that the camera sees.
+    let shadow = shadows
+        .iter()
+        .step_by((shadows.len() / 400).max(1))
+        .filter(|p| lit_visible(**p))
+        .filter_map(|p| on_screen(*p).map(|s| (shadows.iter().filter(|q| q.distance(*p) < 0.5).count(), s)))
+        .max_by_key(|(n, _)| *n)
+        .map(|(_, s)| s);
+    let floor_far = (0..48).map(|k| k as f32 / 48.0 * std::f32::consts::TAU).find_map(|a| {
+        let p = Vec3::new(6.5 * a.cos(), floor_y, 6.5 * a.sin());
+        let clear = shadows.iter().all(|q| q.distance(p) > 2.0) && lit_visible(p);
+        clear.then(|| on_screen(p)).flatten()
+    });
+    let model_color = model.and_then(|m| {
+        let mut counts = std::collections::HashMap::new();
+        for v in &m.0.voxels {
+            *counts.entry([v.color[0], v.color[1], v.color[2]]).or_insert(0usize) += 1;
+        }
+        counts.into_iter().max_by_key(|&(c, n)| (n, c)).map(|(c, _)| c)
+    });
+    ScreenshotProbe {
+        shadow: shadow.map(|s| s.to_array()),
+        floor_far: floor_far.map(|s| s.to_array()),
+        background_top: [window.x - 200.0, 6.0],
+        background_low: [window.x - 200.0, window.y * 0.3],
+        model_color,
+    }
+}
+
+fn sidecar_path(png: &Path) -> PathBuf {
+    let mut name = png.as_os_str().to_owned();
+    name.push(".json");
+    PathBuf::from(name)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    mut commands: Commands,
+    args: Res<AppArgs>,
+    pool: Res<VoxelPool>,
+    library: Res<ModelLibrary>,
+    models: Res<Assets<VoxelModel>>,
+    camera: Query<(&Camera, &GlobalTransform), With<MainCamera>>,
+    light: Query<&GlobalTransform, With<KeyLight>>,
+    floor: Query<&GlobalTransform, With<Floor>>,
+    window: Query<&Window>,
+    mut progress: Local<Progress>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    let Some(path) = &args.screenshot else { return };
+    if progress.requested {
+        return;
+    }
+    if pool.shown.is_none() {
+        progress.waited += 1;
+        if progress.waited > MAX_WAIT_FRAMES {
+            error!("no model was shown after {MAX_WAIT_FRAMES} frames; no screenshot taken");
+            exit.write(AppExit::error());
+        }
+        return;
+    }
+    progress.shown_frames += 1;
+    if progress.shown_frames < args.frames {
+        return;
+    }
+    progress.requested = true;
+    if let (Ok((camera, camera_transform)), Ok(light), Ok(floor), Ok(window)) = (camera.single(), light.single(), floor.single(), window.single()) {
+        let model = library.current_entry().and_then(|e| e.voxels.as_ref()).and_then(|h| models.get(h));
+        let probe = probe(camera, camera_transform, light, floor.translation().y, model, window.size());
+        let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
+        if let Err(e) = std::fs::write(sidecar_path(path), json) {
+            error!("cannot write the screenshot probe: {e}");
+        }
+    }
+    info!("saving screenshot to {}", path.display());
+    commands
+        .spawn(Screenshot::primary_window())
+        .observe(save_to_disk(path.clone()))
+        .observe(|_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
+            exit.write(AppExit::Success);
+        });
+}
+
+pub(super) fn plugin(app: &mut App) {
+    app.add_systems(Update, drive);
+}

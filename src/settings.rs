@@ -1,0 +1,87 @@
+//! User-tunable parameters (the side panel edits them).
+
+use bevy::prelude::*;
+use voxel_core::{FillMode, GridSize, VoxelizeOptions};
+
+/// How voxels look and move.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+pub enum Style {
+    /// Rounded boxes (the article's look).
+    #[default]
+    RoundedBoxes,
+}
+
+impl Style {
+    /// Every style, in the order the panel lists them.
+    pub const ALL: [Style; 1] = [Style::RoundedBoxes];
+
+    /// The panel's label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Style::RoundedBoxes => "Rounded boxes",
+        }
+    }
+}
+
+/// Parameters of voxelization and of the voxels' look.
+#[derive(Resource, Clone, Debug, PartialEq, Reflect)]
+#[reflect(Resource)]
+pub struct VoxelSettings {
+    /// Cell width in model units (the model's diagonal is 9).
+    pub grid_size: f32,
+    /// Fill mode: parity (default), flood or surface only.
+    #[reflect(ignore)]
+    pub fill: FillMode,
+    /// Keep only voxels that can be seen (drops hidden interior voxels).
+    pub hollow: bool,
+    /// The article's pastel colour remap.
+    pub pastel: bool,
+    /// Box edge as a fraction of the cell.
+    pub box_size: f32,
+    /// Corner radius as a fraction of the box edge.
+    pub roundness: f32,
+    /// Animation speed multiplier.
+    pub speed: f32,
+    /// Voxel style.
+    pub style: Style,
+    /// Whether the side panel shows.
+    pub panel_open: bool,
+}
+
+impl Default for VoxelSettings {
+    fn default() -> Self {
+        Self {
+            grid_size: 0.24,
+            fill: FillMode::Parity,
+            hollow: true,
+            pastel: true,
+            box_size: 1.0,
+            roundness: 0.125,
+            speed: 1.0,
+            style: Style::RoundedBoxes,
+            panel_open: true,
+        }
+    }
+}
+
+impl VoxelSettings {
+    /// The smallest and largest grid sizes the panel offers.
+    pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.08..=0.6;
+
+    /// The voxelizer options these settings ask for.
+    pub fn voxelize_options(&self) -> VoxelizeOptions {
+        VoxelizeOptions {
+            grid: GridSize::Cell(self.grid_size.clamp(*Self::GRID_RANGE.start(), *Self::GRID_RANGE.end())),
+            fill: self.fill,
+            hollow: self.hollow,
+            pastel: self.pastel,
+            // The app keeps voxel counts interactive: at most 4 M cells in a grid.
+            max_cells: 1 << 22,
+            ..VoxelizeOptions::default()
+        }
+    }
+}
+
+pub(super) fn plugin(app: &mut App) {
+    app.init_resource::<VoxelSettings>();
+}

@@ -1,0 +1,137 @@
+//! The side panel (egui): models, style, parameters, stats, progress and the last error.
+
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
+use voxel_core::FillMode;
+
+use crate::input::PointerOverUi;
+use crate::instancing::VoxelPool;
+use crate::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use crate::settings::{Style, VoxelSettings};
+use crate::voxelize::VoxelModel;
+
+fn status_mark(status: &ModelStatus) -> &'static str {
+    match status {
+        ModelStatus::Loading => "  (loading…)",
+        ModelStatus::Voxelizing => "  (voxelizing…)",
+        ModelStatus::Ready => "",
+        ModelStatus::Failed(_) => "  ⚠ failed",
+    }
+}
+
+fn model_list(ui: &mut egui::Ui, library: &ModelLibrary, requests: &mut MessageWriter<LibraryRequest>) {
+    ui.heading("Models");
+    for (i, entry) in library.entries.iter().enumerate() {
+        let key = if i < 9 { format!("{} ", i + 1) } else { "   ".into() };
+        let text = egui::RichText::new(format!("{key}{}{}", entry.name, status_mark(&entry.status)));
+        let text = if matches!(entry.status, ModelStatus::Failed(_)) { text.color(egui::Color32::from_rgb(200, 60, 60)) } else { text };
+        let response = ui.selectable_label(i == library.current, text);
+        let response = match &entry.status {
+            ModelStatus::Failed(reason) => response.on_hover_text(reason),
+            _ => response,
+        };
+        if response.clicked() {
+            requests.write(LibraryRequest::Select(i));
+        }
+    }
+    ui.label(egui::RichText::new("Drop .glb/.gltf files on the window to add them.").small());
+}
+
+fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
+    ui.heading("Voxels");
+    egui::ComboBox::from_label("style").selected_text(settings.style.label()).show_ui(ui, |ui| {
+        for style in Style::ALL {
+            ui.selectable_value(&mut settings.style, style, style.label());
+        }
+    });
+    ui.add(egui::Slider::new(&mut settings.grid_size, VoxelSettings::GRID_RANGE).text("grid size").logarithmic(true));
+    ui.add(egui::Slider::new(&mut settings.box_size, 0.4..=1.0).text("box size"));
+    ui.add(egui::Slider::new(&mut settings.roundness, 0.0..=0.5).text("roundness"));
+    ui.add(egui::Slider::new(&mut settings.speed, 0.2..=3.0).text("speed"));
+    ui.horizontal(|ui| {
+        ui.label("fill");
+        ui.selectable_value(&mut settings.fill, FillMode::Parity, "parity");
+        ui.selectable_value(&mut settings.fill, FillMode::Flood, "flood");
+        ui.selectable_value(&mut settings.fill, FillMode::None, "surface");
+    });
+    ui.checkbox(&mut settings.hollow, "hollow (only visible voxels)");
+    ui.checkbox(&mut settings.pastel, "pastel colours");
+}
+
+fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>, pool: &VoxelPool) {
+    ui.heading("Current");
+    let Some(entry) = library.current_entry() else {
+        ui.label("no models");
+        return;
+    };
+    ui.label(&entry.name);
+    match &entry.status {
+        ModelStatus::Loading | ModelStatus::Voxelizing => {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(if entry.status == ModelStatus::Loading { "loading…" } else { "voxelizing…" });
+            });
+        }
+        ModelStatus::Failed(reason) => {
+            ui.colored_label(egui::Color32::from_rgb(200, 60, 60), reason);
+        }
+        ModelStatus::Ready => {}
+    }
+    if let Some(model) = entry.voxels.as_ref().and_then(|h| models.get(h)) {
+        let s = model.0.stats;
+        ui.label(format!("{} voxels shown ({} filled, {} visible)", model.0.voxels.len(), s.voxels, s.visible));
+        ui.label(format!("grid {}×{}×{}, {} triangles, {} colours", s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors));
+        ui.label(format!("voxelized in {:.1} ms", entry.voxelize_ms));
+    }
+    ui.label(format!("voxel pool: {} entities", pool.slots.len()));
+}
+
+#[allow(clippy::too_many_arguments)]
+fn panel(
+    mut contexts: EguiContexts,
+    mut settings: ResMut<VoxelSettings>,
+    library: Res<ModelLibrary>,
+    models: Res<Assets<VoxelModel>>,
+    pool: Res<VoxelPool>,
+    mut requests: MessageWriter<LibraryRequest>,
+    mut over: ResMut<PointerOverUi>,
+) -> Result {
+    let ctx = contexts.ctx_mut()?;
+    ctx.set_visuals(egui::Visuals::light());
+    over.panel = ctx.is_pointer_over_egui() || ctx.egui_wants_pointer_input();
+    if !settings.panel_open {
+        return Ok(());
+    }
+    let mut root = egui::Ui::new(
+        ctx.clone(),
+        "root".into(),
+        egui::UiBuilder::new().layer_id(egui::LayerId::background()).max_rect(ctx.viewport_rect()),
+    );
+    let mut edited = settings.clone();
+    egui::Panel::left("voxel-art panel").resizable(false).exact_size(270.0).show_inside(&mut root, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.heading("voxel-art");
+            model_list(ui, &library, &mut requests);
+            ui.separator();
+            parameters(ui, &mut edited);
+            ui.separator();
+            stats(ui, &library, &models, &pool);
+            if let Some(error) = &library.last_error {
+                ui.separator();
+                ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
+            }
+            ui.separator();
+            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · H: panel · Esc: quit").small());
+        });
+    });
+    // Only touch the resource when something changed, so change detection means "edited".
+    if edited != *settings {
+        *settings = edited;
+    }
+    Ok(())
+}
+
+pub(super) fn plugin(app: &mut App) {
+    app.add_plugins(EguiPlugin::default());
+    app.add_systems(EguiPrimaryContextPass, panel);
+}

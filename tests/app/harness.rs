@@ -1,0 +1,88 @@
+//! A headless app with the logic plugins (no window, no GPU) and a manual time step.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use bevy::asset::AssetPlugin;
+use bevy::image::{CompressedImageFormatSupport, CompressedImageFormats};
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use voxel_art::args::AppArgs;
+use voxel_art::library::{ModelLibrary, ModelStatus};
+
+/// The app under test: MinimalPlugins, assets and glTF loading, the logic plugins.
+pub fn test_app(args: AppArgs) -> App {
+    let mut app = App::new();
+    app.register_asset_source(voxel_art::FILE_SOURCE, bevy::asset::io::AssetSourceBuilder::platform_default("/", None));
+    app.add_plugins((
+        MinimalPlugins,
+        TransformPlugin,
+        AssetPlugin { file_path: voxel_art::args::asset_root().display().to_string(), ..default() },
+        bevy::mesh::MeshPlugin,
+        bevy::image::ImagePlugin::default(),
+        bevy::world_serialization::WorldSerializationPlugin,
+        bevy::gltf::GltfPlugin::default(),
+    ));
+    app.init_asset::<StandardMaterial>();
+    app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
+    app.init_resource::<ButtonInput<KeyCode>>();
+    app.init_resource::<ButtonInput<MouseButton>>();
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
+    app.insert_resource(args);
+    app.add_plugins(voxel_art::LogicPlugin);
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// Steps the app until `done` holds (panics after `limit` of wall time, printing the library).
+pub fn run_until(app: &mut App, limit: Duration, mut done: impl FnMut(&mut App) -> bool) {
+    let start = Instant::now();
+    loop {
+        app.update();
+        if done(app) {
+            return;
+        }
+        if start.elapsed() > limit {
+            let library = app.world().resource::<ModelLibrary>();
+            let states: Vec<_> = library.entries.iter().map(|e| (&e.name, &e.status)).collect();
+            panic!("condition not met within {limit:?}; library: {states:?}");
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// Whether every entry has finished loading and voxelizing (or failed).
+pub fn all_settled(app: &mut App) -> bool {
+    app.world().resource::<ModelLibrary>().entries.iter().all(|e| matches!(e.status, ModelStatus::Ready | ModelStatus::Failed(_)))
+}
+
+/// Presses `key` for one frame.
+pub fn tap(app: &mut App, key: KeyCode) {
+    app.world_mut().resource_mut::<ButtonInput<KeyCode>>().press(key);
+    app.update();
+    let mut keys = app.world_mut().resource_mut::<ButtonInput<KeyCode>>();
+    keys.release(key);
+    keys.clear();
+    app.update();
+}
+
+/// The shipped models folder.
+pub fn shipped(name: &str) -> std::path::PathBuf {
+    voxel_art::args::asset_root().join("models").join(name)
+}
+
+/// Writes bytes to a fresh temp file and returns its path.
+pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("voxel-art-app-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// Voxelizes a file with the core directly (the CLI's front door) for comparison.
+pub fn core_voxelize(path: &Path, options: &voxel_art::voxel::VoxelizeOptions) -> voxel_art::voxel::VoxelModel {
+    let soup = voxel_art::voxel::load_file(path).unwrap();
+    voxel_art::voxel::voxelize(&soup, options).unwrap()
+}

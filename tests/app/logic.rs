@@ -1,0 +1,176 @@
+//! App logic without a GPU: loading, voxelizing, picking models, the voxel pool, settings changes.
+
+use std::time::Duration;
+
+use bevy::mesh::MeshTag;
+use bevy::prelude::*;
+use voxel_art::args::AppArgs;
+use voxel_art::instancing::{VoxelPool, VoxelSlot, unpack_color};
+use voxel_art::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use voxel_art::settings::VoxelSettings;
+use voxel_art::voxelize::{VoxelModel, VoxelizeGeneration, VoxelizeJob};
+
+use crate::harness::{all_settled, core_voxelize, run_until, shipped, tap, temp_file, test_app};
+
+const LIMIT: Duration = Duration::from_secs(60);
+
+fn shown_model(app: &App) -> Option<voxel_art::voxel::VoxelModel> {
+    let library = app.world().resource::<ModelLibrary>();
+    let handle = library.current_entry()?.voxels.clone()?;
+    app.world().resource::<Assets<VoxelModel>>().get(&handle).map(|m| m.0.clone())
+}
+
+#[test]
+fn a_shipped_model_voxelizes_like_the_core_does() {
+    let mut app = test_app(AppArgs::default());
+    run_until(&mut app, LIMIT, all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    assert!(library.entries.len() >= 6, "{} shipped models", library.entries.len());
+    assert!(library.entries.iter().all(|e| e.status == ModelStatus::Ready), "{:?}", library.entries);
+    let options = app.world().resource::<VoxelSettings>().voxelize_options();
+    for i in 0..library.entries.len() {
+        let library = app.world().resource::<ModelLibrary>();
+        let entry = &library.entries[i];
+        let app_model = app.world().resource::<Assets<VoxelModel>>().get(entry.voxels.as_ref().unwrap()).unwrap();
+        let core_model = core_voxelize(&shipped(&format!("{}.glb", entry.name)), &options);
+        // The Bevy front door (loaded Gltf assets) and the gltf-crate one give the same voxels.
+        assert_eq!(app_model.0.stats, core_model.stats, "{}", entry.name);
+        assert_eq!(app_model.0.voxels.len(), core_model.voxels.len(), "{}", entry.name);
+    }
+}
+
+#[test]
+fn the_pool_shows_the_current_model_and_hides_spares() {
+    let mut app = test_app(AppArgs::default());
+    run_until(&mut app, LIMIT, all_settled);
+    // Find the largest and the smallest model.
+    let counts: Vec<usize> = {
+        let library = app.world().resource::<ModelLibrary>();
+        let models = app.world().resource::<Assets<VoxelModel>>();
+        library.entries.iter().map(|e| models.get(e.voxels.as_ref().unwrap()).unwrap().0.voxels.len()).collect()
+    };
+    let largest = (0..counts.len()).max_by_key(|&i| counts[i]).unwrap();
+    let smallest = (0..counts.len()).min_by_key(|&i| counts[i]).unwrap();
+    for pick in [largest, smallest] {
+        app.world_mut().write_message(LibraryRequest::Select(pick));
+        for _ in 0..3 {
+            app.update();
+        }
+    }
+    let pool = app.world().resource::<VoxelPool>();
+    assert_eq!(pool.slots.len(), counts[largest], "the pool grew to the largest model");
+    assert_eq!(pool.visible, counts[smallest]);
+    let model = shown_model(&app).unwrap();
+    let mut query = app.world_mut().query::<(&VoxelSlot, &Transform, &MeshTag, &Visibility)>();
+    let mut hidden = 0;
+    for (slot, transform, tag, visibility) in query.iter(app.world()) {
+        match model.voxels.get(slot.0 as usize) {
+            Some(v) => {
+                assert_eq!(*visibility, Visibility::Inherited);
+                assert_eq!(transform.translation, Vec3::from(model.center(v)));
+                assert_eq!(unpack_color(tag.0), v.color);
+            }
+            None => {
+                assert_eq!(*visibility, Visibility::Hidden);
+                hidden += 1;
+            }
+        }
+    }
+    assert_eq!(hidden, counts[largest] - counts[smallest]);
+}
+
+#[test]
+fn keys_move_the_current_model() {
+    let mut app = test_app(AppArgs::default());
+    app.update();
+    let n = app.world().resource::<ModelLibrary>().entries.len();
+    let current = |app: &App| app.world().resource::<ModelLibrary>().current;
+    assert_eq!(current(&app), 0);
+    tap(&mut app, KeyCode::ArrowRight);
+    assert_eq!(current(&app), 1);
+    tap(&mut app, KeyCode::Space);
+    assert_eq!(current(&app), 2);
+    tap(&mut app, KeyCode::ArrowLeft);
+    tap(&mut app, KeyCode::ArrowLeft);
+    tap(&mut app, KeyCode::ArrowLeft);
+    assert_eq!(current(&app), n - 1, "left wraps around");
+    tap(&mut app, KeyCode::Digit4);
+    assert_eq!(current(&app), 3);
+    tap(&mut app, KeyCode::Digit9);
+    assert_eq!(current(&app), 3, "no ninth model: the pick stays");
+    let open = app.world().resource::<VoxelSettings>().panel_open;
+    tap(&mut app, KeyCode::KeyH);
+    assert_eq!(app.world().resource::<VoxelSettings>().panel_open, !open);
+}
+
+#[test]
+fn a_bad_file_becomes_an_error_entry_and_the_app_goes_on() {
+    let junk = temp_file("junk.glb", b"this is not a glTF file");
+    let missing = std::env::temp_dir().join("voxel-art-no-such-model.glb");
+    let args = AppArgs { models: vec![junk.clone(), missing], ..default() };
+    let mut app = test_app(args);
+    run_until(&mut app, LIMIT, all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    let junk_entry = library.entries.iter().find(|e| e.name == "junk").unwrap();
+    let ModelStatus::Failed(reason) = &junk_entry.status else { panic!("junk loaded: {:?}", junk_entry.status) };
+    assert!(!reason.is_empty());
+    let missing_entry = library.entries.iter().find(|e| e.name == "voxel-art-no-such-model").unwrap();
+    assert!(matches!(&missing_entry.status, ModelStatus::Failed(r) if r.contains("no such file")), "{:?}", missing_entry.status);
+    assert!(library.last_error.is_some());
+    let ready = library.entries.iter().filter(|e| e.status == ModelStatus::Ready).count();
+    assert!(ready >= 6, "the good models still voxelize");
+    // Picking the failed model keeps the app running and the previous voxels on screen.
+    let bad = library.entries.iter().position(|e| e.name == "junk").unwrap();
+    app.world_mut().write_message(LibraryRequest::Select(bad));
+    for _ in 0..5 {
+        app.update();
+    }
+    assert_eq!(app.world().resource::<ModelLibrary>().current, bad);
+    assert!(app.world().resource::<VoxelPool>().shown.is_some());
+}
+
+#[test]
+fn dropped_files_join_the_list_and_are_picked() {
+    let mut app = test_app(AppArgs::default());
+    app.update();
+    let before = app.world().resource::<ModelLibrary>().entries.len();
+    let copy = temp_file("dropped-egg.glb", &std::fs::read(shipped("fried-egg.glb")).unwrap());
+    app.world_mut().write_message(bevy::window::FileDragAndDrop::DroppedFile { window: Entity::PLACEHOLDER, path_buf: copy });
+    run_until(&mut app, LIMIT, all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    assert_eq!(library.entries.len(), before + 1);
+    assert_eq!(library.current, before);
+    assert_eq!(library.entries[before].name, "dropped-egg");
+    assert_eq!(library.entries[before].status, ModelStatus::Ready);
+}
+
+#[test]
+fn a_parameter_change_revoxelizes_and_stale_results_are_dropped() {
+    let mut app = test_app(AppArgs::default());
+    run_until(&mut app, LIMIT, all_settled);
+    let generation = |app: &App| app.world().resource::<VoxelizeGeneration>().0;
+    let g0 = generation(&app);
+    // Two changes in a row: the jobs of the first are stale before they finish.
+    app.world_mut().resource_mut::<VoxelSettings>().grid_size = 0.3;
+    app.update();
+    app.world_mut().resource_mut::<VoxelSettings>().grid_size = 0.2;
+    app.update();
+    assert_eq!(generation(&app), g0 + 2);
+    let latest = generation(&app);
+    run_until(&mut app, LIMIT, |app| {
+        app.world().resource::<ModelLibrary>().entries.iter().all(|e| e.voxels_generation == Some(latest))
+    });
+    // No job of an older generation survives.
+    let mut jobs = app.world_mut().query::<&VoxelizeJob>();
+    assert!(jobs.iter(app.world()).all(|j| j.generation == latest));
+    let options = app.world().resource::<VoxelSettings>().voxelize_options();
+    let current = shown_model(&app).unwrap();
+    let name = app.world().resource::<ModelLibrary>().current_entry().unwrap().name.clone();
+    assert_eq!(current.stats, core_voxelize(&shipped(&format!("{name}.glb")), &options).stats);
+    assert!((current.spec.cell[0] - 0.2).abs() < 1e-6);
+    // The pool shows the new voxelization.
+    for _ in 0..3 {
+        app.update();
+    }
+    assert_eq!(app.world().resource::<VoxelPool>().visible, current.voxels.len());
+}

@@ -1,0 +1,95 @@
+//! Renders the real app headless (Xvfb + Mesa's lavapipe Vulkan) and checks the screenshot's pixels.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::scratch_dir;
+
+fn hsl(rgb: [u8; 3]) -> [f32; 3] {
+    voxel_art::voxel::color::rgb_to_hsl(rgb.map(|c| f32::from(c) / 255.0))
+}
+
+fn luminance(p: [u8; 3]) -> f32 {
+    0.2126 * f32::from(p[0]) + 0.7152 * f32::from(p[1]) + 0.0722 * f32::from(p[2])
+}
+
+/// Mean colour of a 9×9 block around a logical point.
+fn sample(img: &image::RgbaImage, at: [f32; 2]) -> [u8; 3] {
+    let (cx, cy) = (at[0] as i64, at[1] as i64);
+    let mut sum = [0u64; 3];
+    let mut n = 0;
+    for y in cy - 4..=cy + 4 {
+        for x in cx - 4..=cx + 4 {
+            if x >= 0 && y >= 0 && (x as u32) < img.width() && (y as u32) < img.height() {
+                let p = img.get_pixel(x as u32, y as u32);
+                for c in 0..3 {
+                    sum[c] += u64::from(p[c]);
+                }
+                n += 1;
+            }
+        }
+    }
+    sum.map(|s| (s / n.max(1)) as u8)
+}
+
+/// Runs `voxel-art --screenshot` under Xvfb with lavapipe; `None` when Xvfb is not installed.
+fn screenshot(out: &Path, frames: u32) -> Option<std::process::Output> {
+    if Command::new("xvfb-run").arg("--help").output().is_err() {
+        println!("skipped: xvfb-run is not installed (apt-get install xvfb xauth mesa-vulkan-drivers)");
+        return None;
+    }
+    let runtime = scratch_dir("xdg");
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x720x24", env!("CARGO_BIN_EXE_voxel-art")])
+        .arg("--screenshot")
+        .arg(out)
+        .args(["--frames", &frames.to_string()])
+        .env("VK_ICD_FILENAMES", "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json")
+        .env("WGPU_BACKEND", "vulkan")
+        .env("XDG_RUNTIME_DIR", runtime)
+        .output()
+        .unwrap();
+    Some(output)
+}
+
+#[test]
+fn the_app_renders_pastel_voxels_on_a_lit_stage() {
+    let dir = scratch_dir("render");
+    let out = dir.join("stage.png");
+    let Some(run) = screenshot(&out, 30) else { return };
+    assert!(run.status.success(), "app failed: {}\n{}", run.status, String::from_utf8_lossy(&run.stderr));
+    let img = image::open(&out).expect("screenshot written").to_rgba8();
+    assert_eq!((img.width(), img.height()), (1280, 720));
+    let probe: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("stage.png.json")).unwrap()).unwrap();
+    let point = |key: &str| -> [f32; 2] {
+        let v = &probe[key];
+        [v[0].as_f64().unwrap_or_else(|| panic!("{key} not on screen: {probe}")) as f32, v[1].as_f64().unwrap() as f32]
+    };
+
+    // The first model's voxel colour is on screen: many pixels share its hue, saturated.
+    let model = probe["model_color"].as_array().expect("model colour");
+    let model_rgb = [0, 1, 2].map(|i| model[i].as_u64().unwrap() as u8);
+    let [h, s, _] = hsl(model_rgb);
+    assert!(s > 0.2, "model colour {model_rgb:?} is too grey to recognise");
+    let matching = img
+        .pixels()
+        .filter(|p| {
+            let [ph, ps, pl] = hsl([p[0], p[1], p[2]]);
+            let dh = (ph - h).abs().min(1.0 - (ph - h).abs());
+            dh < 0.04 && ps > s * 0.5 && pl > 0.15 && pl < 0.95
+        })
+        .count();
+    assert!(matching > 2_000, "only {matching} pixels of the model's hue {h:.3}");
+
+    // The background is a gradient: pinker at the top, more lilac lower down.
+    let top = sample(&img, point("background_top"));
+    let low = sample(&img, point("background_low"));
+    let pink = |p: [u8; 3]| i32::from(p[0]) - i32::from(p[2]);
+    assert!(pink(top) > pink(low) + 8, "no gradient: top {top:?}, low {low:?}");
+    assert!(luminance(top) > 150.0 && luminance(low) > 150.0, "background too dark: {top:?} {low:?}");
+
+    // The floor under the model (its shadow) is darker than the floor far from it.
+    let shadow = sample(&img, point("shadow"));
+    let far = sample(&img, point("floor_far"));
+    assert!(luminance(shadow) + 20.0 < luminance(far), "no shadow: under {shadow:?}, far {far:?}");
+}
