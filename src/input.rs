@@ -75,7 +75,7 @@ struct Press {
 /// Turns short, still presses of the left button on the stage into [`StageClick`]s.
 fn clicks(
     buttons: Res<ButtonInput<MouseButton>>,
-    time: Res<Time<Real>>,
+    time: Res<Time>,
     window: Query<&Window, With<PrimaryWindow>>,
     over_ui: Res<PointerOverUi>,
     mut press: Local<Press>,

@@ -9,46 +9,10 @@ fn voxelize(args: &[&str]) -> std::process::Output {
 }
 
 fn write_cube_glb(dir: &std::path::Path) -> std::path::PathBuf {
-    // A cube built by the library and written as a minimal .glb (one buffer, one node).
-    let mesh = voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]);
-    let mut bin = Vec::new();
-    for p in &mesh.positions {
-        for c in p {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    let positions = bin.len();
-    for t in &mesh.triangles {
-        for &i in t {
-            bin.extend_from_slice(&i.to_le_bytes());
-        }
-    }
-    let json = format!(
-        r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
-        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
-        "buffers":[{{"byteLength":{len}}}],
-        "bufferViews":[{{"buffer":0,"byteLength":{positions}}},{{"buffer":0,"byteOffset":{positions},"byteLength":144}}],
-        "accessors":[{{"bufferView":0,"componentType":5126,"count":8,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
-                     {{"bufferView":1,"componentType":5125,"count":36,"type":"SCALAR"}}]}}"#,
-        len = bin.len()
-    );
-    let mut json = json.into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&(total as u32).to_le_bytes());
-    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&json);
-    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&bin);
+    let cube = voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]);
+    let soup = voxel_art::voxel::TriangleSoup::from_mesh(&cube, [1.0; 4]);
     let path = dir.join("cube.glb");
-    std::fs::write(&path, glb).unwrap();
+    std::fs::write(&path, voxel_art::voxel::glb::soup_to_glb(&soup)).unwrap();
     path
 }
 

@@ -174,3 +174,40 @@ fn a_parameter_change_revoxelizes_and_stale_results_are_dropped() {
     }
     assert_eq!(app.world().resource::<VoxelPool>().visible, current.voxels.len());
 }
+
+/// Presses the left button, waits `hold` frames (1/60 s each), releases.
+fn click(app: &mut App, hold: usize, drag: f32) {
+    let window = app.world_mut().query_filtered::<Entity, With<bevy::window::PrimaryWindow>>().single(app.world()).unwrap();
+    let set_cursor = |app: &mut App, x: f32| {
+        app.world_mut().get_mut::<Window>(window).unwrap().set_cursor_position(Some(Vec2::new(x, 300.0)));
+    };
+    set_cursor(app, 640.0);
+    app.world_mut().resource_mut::<ButtonInput<MouseButton>>().press(MouseButton::Left);
+    app.update();
+    app.world_mut().resource_mut::<ButtonInput<MouseButton>>().clear();
+    for _ in 0..hold {
+        set_cursor(app, 640.0 + drag);
+        app.update();
+    }
+    app.world_mut().resource_mut::<ButtonInput<MouseButton>>().release(MouseButton::Left);
+    app.update();
+    app.world_mut().resource_mut::<ButtonInput<MouseButton>>().clear();
+    app.update();
+}
+
+#[test]
+fn a_short_click_on_the_stage_shows_the_next_model_but_a_hold_or_drag_does_not() {
+    let mut app = test_app(AppArgs::default());
+    app.world_mut().spawn((Window::default(), bevy::window::PrimaryWindow));
+    app.update();
+    let current = |app: &App| app.world().resource::<ModelLibrary>().current;
+    click(&mut app, 3, 0.0);
+    assert_eq!(current(&app), 1, "a short click goes to the next model");
+    click(&mut app, 40, 0.0);
+    assert_eq!(current(&app), 1, "a long press orbits instead");
+    click(&mut app, 3, 40.0);
+    assert_eq!(current(&app), 1, "a drag orbits instead");
+    app.world_mut().resource_mut::<voxel_art::input::PointerOverUi>().panel = true;
+    click(&mut app, 3, 0.0);
+    assert_eq!(current(&app), 1, "clicks on the panel do not reach the stage");
+}

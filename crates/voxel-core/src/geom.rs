@@ -109,11 +109,6 @@ impl BoxTester {
     }
 }
 
-/// Triangle–axis-aligned-box overlap, box given by centre and half size; touching counts as overlapping.
-pub fn triangle_box_overlap(center: DVec3, half: DVec3, t: &GridTriangle) -> bool {
-    BoxTester::new(t).overlaps(center, half)
-}
-
 /// The closest point of triangle `t` to `p`, as barycentric weights of its corners (Ericson, RTCD 5.1.5).
 pub fn closest_point_barycentric(p: DVec3, t: &GridTriangle) -> [f64; 3] {
     let [a, b, c] = *t;
@@ -223,16 +218,20 @@ mod tests {
         assert!((depth_at(&t, [0.5, 0.5]) - 1.5).abs() < 1e-12);
     }
 
+    fn overlaps(c: DVec3, h: DVec3, t: &GridTriangle) -> bool {
+        BoxTester::new(t).overlaps(c, h)
+    }
+
     #[test]
     fn box_overlap_catches_thin_slivers_and_rejects_near_misses() {
         let c = DVec3::splat(0.5);
         let h = DVec3::splat(0.5);
         // A big triangle crossing the box diagonally although no corner is inside.
-        assert!(triangle_box_overlap(c, h, &tri([-5.0, -5.0, 0.5], [5.0, -5.0, 0.5], [0.0, 5.0, 0.5])));
+        assert!(overlaps(c, h, &tri([-5.0, -5.0, 0.5], [5.0, -5.0, 0.5], [0.0, 5.0, 0.5])));
         // A plane just past the corner (1,1,1) along the diagonal misses.
         let d = 3.0 + 1e-6;
-        assert!(!triangle_box_overlap(c, h, &tri([d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d])));
-        assert!(triangle_box_overlap(c, h, &tri([2.9, 0.0, 0.0], [0.0, 2.9, 0.0], [0.0, 0.0, 2.9])));
+        assert!(!overlaps(c, h, &tri([d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d])));
+        assert!(overlaps(c, h, &tri([2.9, 0.0, 0.0], [0.0, 2.9, 0.0], [0.0, 0.0, 2.9])));
     }
 
     #[test]

@@ -79,11 +79,21 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Vec<u8> {
         "bufferViews": views,
         "accessors": accessors,
     });
-    let mut json = serde_json::to_vec(&doc).expect("JSON of plain values");
+    pack(&doc, &bin)
+}
+
+/// Packs a glTF JSON document and its binary buffer into the .glb container (both chunks padded to 4 bytes).
+pub fn pack(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::to_vec(doc).expect("JSON of plain values");
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = 12 + 8 + json.len() + bin_chunk;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -91,9 +101,11 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Vec<u8> {
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
     out
 }
 

@@ -111,27 +111,24 @@ impl GridSpec {
         [(index / nz / ny) as u32, (index / nz % ny) as u32, (index % nz) as u32]
     }
 
-    /// The index of the face neighbour of `index` one step along `axis` in direction `dir` (±1).
-    #[inline]
-    pub fn neighbour(&self, index: usize, axis: usize, dir: i32) -> Option<usize> {
-        let mut step = [0; 3];
-        step[axis] = dir;
-        self.offset(index, step)
-    }
-
     /// The index of the cell at `index + step`, if inside the grid.
     #[inline]
     pub fn offset(&self, index: usize, step: [i32; 3]) -> Option<usize> {
-        let c = self.coords(index);
+        self.step(self.coords(index), step).map(|c| self.index(c[0], c[1], c[2]))
+    }
+
+    /// The cell at `cell + step`, if inside the grid.
+    #[inline]
+    pub fn step(&self, cell: [u32; 3], step: [i32; 3]) -> Option<[u32; 3]> {
         let mut out = [0u32; 3];
         for a in 0..3 {
-            let v = i64::from(c[a]) + i64::from(step[a]);
+            let v = i64::from(cell[a]) + i64::from(step[a]);
             if v < 0 || v >= i64::from(self.dims[a]) {
                 return None;
             }
             out[a] = v as u32;
         }
-        Some(self.index(out[0], out[1], out[2]))
+        Some(out)
     }
 
     /// Model-space centre of cell (x, y, z).
@@ -281,8 +278,8 @@ mod tests {
         let g = GridSpec::fit(&unit_cube_corners(), 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
         let i = g.index(3, 2, 7);
         assert_eq!(g.coords(i), [3, 2, 7]);
-        assert_eq!(g.neighbour(i, 2, 1), Some(g.index(3, 2, 8)));
-        assert_eq!(g.neighbour(g.index(0, 0, 0), 0, -1), None);
+        assert_eq!(g.offset(i, [0, 0, 1]), Some(g.index(3, 2, 8)));
+        assert_eq!(g.offset(g.index(0, 0, 0), [-1, 0, 0]), None);
         assert_eq!(g.offset(i, [1, -1, 1]), Some(g.index(4, 1, 8)));
     }
 

@@ -44,15 +44,7 @@ fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
 
 /// Whether the cell at `c + step` exists and is filled.
 fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bool {
-    let mut n = [0u32; 3];
-    for a in 0..3 {
-        let v = i64::from(c[a]) + i64::from(step[a]);
-        if v < 0 || v >= i64::from(spec.dims[a]) {
-            return false;
-        }
-        n[a] = v as u32;
-    }
-    fill.get(spec.index(n[0], n[1], n[2]))
+    spec.step(c, step).is_some_and(|n| fill.get(spec.index(n[0], n[1], n[2])))
 }
 
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a

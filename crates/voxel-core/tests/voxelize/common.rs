@@ -36,28 +36,7 @@ pub fn cells(model: &VoxelModel) -> HashSet<[u16; 3]> {
 
 /// Packs a JSON document and a binary chunk into a .glb.
 pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut json_bytes = serde_json::to_vec(json).unwrap();
-    while !json_bytes.len().is_multiple_of(4) {
-        json_bytes.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json_bytes);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-    }
-    out
+    voxel_core::glb::pack(json, bin)
 }
 
 /// A unit cube (8 positions, 36 u16 indices) as little-endian bytes, positions first.
