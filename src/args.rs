@@ -20,6 +20,10 @@ pub struct AppArgs {
     /// Start with the model at this index of the list (0-based).
     #[arg(long, default_value_t = 0)]
     pub start: usize,
+    /// With --screenshot: once the first model has settled, switch to this model (0-based) and count
+    /// --frames from the switch (a frame of the morph).
+    #[arg(long)]
+    pub then: Option<usize>,
 }
 
 impl AppArgs {

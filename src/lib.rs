@@ -2,7 +2,7 @@
 //!
 //! Plugins (one per module, `pub(super) fn plugin`): `library` (the model list), `voxelize` (async
 //! voxelization into [`voxelize::VoxelModel`] assets), `instancing` (one entity per voxel, one mesh, one
-//! material, colour in `MeshTag`), `input`, and the render-side `stage`, `camera`, `ui`, `preview`,
+//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `input`, and the render-side `stage`, `camera`, `ui`, `preview`,
 //! `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU, for tests.
 
 pub mod args;
@@ -15,6 +15,7 @@ pub mod rng;
 mod screenshot;
 pub mod settings;
 mod stage;
+pub mod transition;
 mod ui;
 pub mod voxelize;
 
@@ -47,7 +48,7 @@ pub struct LogicPlugin;
 impl Plugin for LogicPlugin {
     fn build(&self, app: &mut App) {
         app.configure_sets(Update, (AppSystems::Input, AppSystems::Simulate, AppSystems::Animate, AppSystems::Sync).chain());
-        app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, input::plugin));
+        app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, transition::plugin, input::plugin));
     }
 }
 

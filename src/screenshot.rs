@@ -1,5 +1,6 @@
-//! `--screenshot out.png --frames N`: once the first model shows, run N more frames, save the window to a
-//! PNG and exit (status 0), or exit with status 1 if no model ever shows. Next to the PNG, `out.png.json`
+//! `--screenshot out.png --frames N [--then M]`: once the first model has settled, run N more frames (with
+//! `--then`, switch to model M first: a frame of the morph), save the window to a PNG and exit (status 0), or
+//! exit with status 1 if no model ever shows. Next to the PNG, `out.png.json`
 //! names where the camera projects the points a test checks: the floor under the model (in its shadow), the
 //! floor far from it, the background, and the model's most common voxel colour.
 
@@ -11,7 +12,8 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_dis
 use crate::args::AppArgs;
 use crate::camera::MainCamera;
 use crate::instancing::VoxelPool;
-use crate::library::ModelLibrary;
+use crate::library::{LibraryRequest, ModelLibrary};
+use crate::transition::ActiveTransition;
 use crate::stage::{Floor, KeyLight};
 use crate::voxelize::VoxelModel;
 
@@ -21,7 +23,9 @@ const MAX_WAIT_FRAMES: u32 = 3_000;
 #[derive(Default)]
 struct Progress {
     waited: u32,
-    shown_frames: u32,
+    switched: bool,
+    counting: bool,
+    frames: u32,
     requested: bool,
 }
 
@@ -116,6 +120,8 @@ fn drive(
     light: Query<&GlobalTransform, With<KeyLight>>,
     floor: Query<&GlobalTransform, With<Floor>>,
     window: Query<&Window>,
+    active: Res<ActiveTransition>,
+    mut requests: MessageWriter<LibraryRequest>,
     mut progress: Local<Progress>,
     mut exit: MessageWriter<AppExit>,
 ) {
@@ -123,16 +129,32 @@ fn drive(
     if progress.requested {
         return;
     }
-    if pool.shown.is_none() {
-        progress.waited += 1;
-        if progress.waited > MAX_WAIT_FRAMES {
-            error!("no model was shown after {MAX_WAIT_FRAMES} frames; no screenshot taken");
-            exit.write(AppExit::error());
+    if !progress.counting {
+        let settled = pool.shown.is_some() && active.running.is_none();
+        // Wait for the first model to settle; with --then, switch and wait for the morph to begin.
+        let ready = match args.then {
+            None => settled,
+            Some(next) if !progress.switched => {
+                if settled {
+                    requests.write(LibraryRequest::Select(next));
+                    progress.switched = true;
+                }
+                false
+            }
+            Some(_) => active.running.is_some(),
+        };
+        if !ready {
+            progress.waited += 1;
+            if progress.waited > MAX_WAIT_FRAMES {
+                error!("no model was shown after {MAX_WAIT_FRAMES} frames; no screenshot taken");
+                exit.write(AppExit::error());
+            }
+            return;
         }
-        return;
+        progress.counting = true;
     }
-    progress.shown_frames += 1;
-    if progress.shown_frames < args.frames {
+    progress.frames += 1;
+    if progress.frames < args.frames {
         return;
     }
     progress.requested = true;

@@ -8,6 +8,7 @@ use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
 use crate::library::{LibraryRequest, ModelLibrary, ModelStatus};
 use crate::settings::{Style, VoxelSettings};
+use crate::transition::{Assignment, TransitionSettings};
 use crate::voxelize::VoxelModel;
 
 fn status_mark(status: &ModelStatus) -> &'static str {
@@ -58,6 +59,28 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
     ui.checkbox(&mut settings.pastel, "pastel colours");
 }
 
+fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
+    egui::CollapsingHeader::new("Transition").show(ui, |ui| {
+        ui.add(egui::Slider::new(&mut t.max_delay, 0.0..=1.0).text("max delay s"));
+        ui.add(egui::Slider::new(&mut t.base_duration, 0.1..=2.0).text("duration s"));
+        ui.add(egui::Slider::new(&mut t.extra_duration, 0.0..=2.0).text("+ random s"));
+        ui.add(egui::Slider::new(&mut t.overshoot, 0.0..=6.0).text("overshoot"));
+        ui.add(egui::Slider::new(&mut t.color_delay_factor, 0.0..=1.0).text("colour delay"));
+        ui.add(egui::Slider::new(&mut t.spin_angle, 0.0..=4.0 * std::f32::consts::PI).text("spin rad"));
+        ui.add(egui::Slider::new(&mut t.spin_duration, 0.1..=3.0).text("spin s"));
+        ui.add(egui::Slider::new(&mut t.count_duration, 0.0..=2.0).text("count s"));
+        ui.horizontal(|ui| {
+            ui.label("match");
+            ui.selectable_value(&mut t.assignment, Assignment::Height, "height");
+            ui.selectable_value(&mut t.assignment, Assignment::Morton, "Morton");
+            ui.selectable_value(&mut t.assignment, Assignment::Grid, "grid");
+        });
+        if ui.button("reset timings").clicked() {
+            *t = TransitionSettings::default();
+        }
+    });
+}
+
 fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>, pool: &VoxelPool) {
     ui.heading("Current");
     let Some(entry) = library.current_entry() else {
@@ -95,6 +118,7 @@ fn panel(
     pool: Res<VoxelPool>,
     mut requests: MessageWriter<LibraryRequest>,
     mut over: ResMut<PointerOverUi>,
+    mut transition: ResMut<TransitionSettings>,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
@@ -114,6 +138,11 @@ fn panel(
             model_list(ui, &library, &mut requests);
             ui.separator();
             parameters(ui, &mut edited);
+            let mut edited_transition = transition.clone();
+            transition_settings(ui, &mut edited_transition);
+            if edited_transition != *transition {
+                *transition = edited_transition;
+            }
             ui.separator();
             stats(ui, &library, &models, &pool);
             if let Some(error) = &library.last_error {

@@ -1,6 +1,6 @@
 //! The voxel pool: one entity per voxel, all sharing one mesh and one material (one batch), each voxel's
 //! colour packed in its `MeshTag`. The pool grows to the largest model shown and hides its spares. While no
-//! model is ready, random pastel boxes float in its place.
+//! model is ready, random pastel boxes float in its place. The `transition` plugin lays models out.
 
 pub mod material;
 pub mod mesh;
@@ -13,6 +13,7 @@ pub use material::{VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxe
 
 use crate::AppSystems;
 use crate::library::{ModelLibrary, ModelStatus};
+
 use crate::rng::Rng;
 use crate::settings::VoxelSettings;
 use crate::voxelize::VoxelModel;
@@ -154,37 +155,6 @@ fn grow_for_current(mut commands: Commands, mut pool: ResMut<VoxelPool>, assets:
     }
 }
 
-/// Shows the current model (instantly) once its voxels are ready and the pool is big enough; shows the
-/// placeholder until then.
-fn show_current(
-    mut pool: ResMut<VoxelPool>,
-    library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
-    settings: Res<VoxelSettings>,
-    mut voxels: Query<(&VoxelSlot, &mut Transform, &mut MeshTag, &mut Visibility)>,
-    mut placeholder_shown: Local<bool>,
-    mut last_box_size: Local<f32>,
-) {
-    let wanted = library.current_entry().filter(|e| e.status == ModelStatus::Ready).and_then(|e| e.voxels.as_ref());
-    match wanted.and_then(|h| models.get(h).map(|m| (h.id(), m))) {
-        Some((id, model)) => {
-            let spawned = voxels.iter().len();
-            let changed = pool.shown != Some(id) || *last_box_size != settings.box_size;
-            if changed && spawned >= model.0.voxels.len() {
-                apply_targets(&mut pool, &targets_for(&model.0, settings.box_size), &mut voxels);
-                pool.shown = Some(id);
-                *last_box_size = settings.box_size;
-                *placeholder_shown = false;
-            }
-        }
-        None if pool.shown.is_none() && !*placeholder_shown && voxels.iter().len() >= PLACEHOLDER_COUNT => {
-            apply_targets(&mut pool, &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed), &mut voxels);
-            *placeholder_shown = true;
-        }
-        None => {}
-    }
-}
-
 /// Placeholder boxes bob gently while nothing is voxelized yet.
 fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&VoxelSlot, &mut Transform)>) {
     if pool.shown.is_some() {
@@ -214,7 +184,7 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelPool>();
     app.register_type::<VoxelSlot>().register_type::<VoxelCloud>();
     app.add_systems(Startup, setup);
-    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate), (show_current, update_mesh).in_set(AppSystems::Sync)));
+    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate), update_mesh.in_set(AppSystems::Sync)));
 }
 
 /// Rendering: the material's pipeline.

@@ -2,10 +2,9 @@
 
 use std::time::Duration;
 
-use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use voxel_art::args::AppArgs;
-use voxel_art::instancing::{VoxelPool, VoxelSlot, unpack_color};
+use voxel_art::instancing::VoxelPool;
 use voxel_art::library::{LibraryRequest, ModelLibrary, ModelStatus};
 use voxel_art::settings::VoxelSettings;
 use voxel_art::voxelize::{VoxelModel, VoxelizeGeneration, VoxelizeJob};
@@ -14,7 +13,7 @@ use crate::harness::{all_settled, core_voxelize, run_until, shipped, tap, temp_f
 
 const LIMIT: Duration = Duration::from_secs(60);
 
-fn shown_model(app: &App) -> Option<voxel_art::voxel::VoxelModel> {
+pub fn shown_model(app: &App) -> Option<voxel_art::voxel::VoxelModel> {
     let library = app.world().resource::<ModelLibrary>();
     let handle = library.current_entry()?.voxels.clone()?;
     app.world().resource::<Assets<VoxelModel>>().get(&handle).map(|m| m.0.clone())
@@ -53,29 +52,12 @@ fn the_pool_shows_the_current_model_and_hides_spares() {
     let smallest = (0..counts.len()).min_by_key(|&i| counts[i]).unwrap();
     for pick in [largest, smallest] {
         app.world_mut().write_message(LibraryRequest::Select(pick));
-        for _ in 0..3 {
-            app.update();
-        }
+        crate::transition::settle(&mut app);
     }
     let pool = app.world().resource::<VoxelPool>();
     assert_eq!(pool.slots.len(), counts[largest], "the pool grew to the largest model");
     assert_eq!(pool.visible, counts[smallest]);
-    let model = shown_model(&app).unwrap();
-    let mut query = app.world_mut().query::<(&VoxelSlot, &Transform, &MeshTag, &Visibility)>();
-    let mut hidden = 0;
-    for (slot, transform, tag, visibility) in query.iter(app.world()) {
-        match model.voxels.get(slot.0 as usize) {
-            Some(v) => {
-                assert_eq!(*visibility, Visibility::Inherited);
-                assert_eq!(transform.translation, Vec3::from(model.center(v)));
-                assert_eq!(unpack_color(tag.0), v.color);
-            }
-            None => {
-                assert_eq!(*visibility, Visibility::Hidden);
-                hidden += 1;
-            }
-        }
-    }
+    let hidden = crate::transition::assert_shows_model(&mut app);
     assert_eq!(hidden, counts[largest] - counts[smallest]);
 }
 
@@ -168,11 +150,10 @@ fn a_parameter_change_revoxelizes_and_stale_results_are_dropped() {
     let name = app.world().resource::<ModelLibrary>().current_entry().unwrap().name.clone();
     assert_eq!(current.stats, core_voxelize(&shipped(&format!("{name}.glb")), &options).stats);
     assert!((current.spec.cell[0] - 0.2).abs() < 1e-6);
-    // The pool shows the new voxelization.
-    for _ in 0..3 {
-        app.update();
-    }
+    // The pool morphs to the new voxelization.
+    crate::transition::settle(&mut app);
     assert_eq!(app.world().resource::<VoxelPool>().visible, current.voxels.len());
+    crate::transition::assert_shows_model(&mut app);
 }
 
 /// Presses the left button, waits `hold` frames (1/60 s each), releases.

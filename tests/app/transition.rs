@@ -1,0 +1,157 @@
+//! Morphs: arrival, re-triggering mid-flight, rapid switching.
+
+use std::collections::HashMap;
+use std::time::Duration;
+
+use bevy::mesh::MeshTag;
+use bevy::prelude::*;
+use voxel_art::args::AppArgs;
+use voxel_art::instancing::{VoxelPool, VoxelSlot, unpack_color};
+use voxel_art::library::LibraryRequest;
+use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
+use voxel_art::settings::VoxelSettings;
+
+use crate::harness::{all_settled, run_until, test_app};
+use crate::logic::shown_model;
+
+/// Steps until no voxel carries a tween (at most 10 s of app time).
+pub fn settle(app: &mut App) {
+    for _ in 0..600 {
+        app.update();
+        let mut tweens = app.world_mut().query::<&VoxelTween>();
+        let shown = app.world().resource::<VoxelPool>().shown;
+        let wanted = shown_model(app).is_some() && shown.is_some();
+        if wanted && tweens.iter(app.world()).next().is_none() && app.world().resource::<ActiveTransition>().running.is_none() {
+            return;
+        }
+    }
+    panic!("the transition never settled");
+}
+
+/// Checks every slot sits exactly on its cell of the shown model with its colour, spares hidden; returns the
+/// number of hidden slots.
+pub fn assert_shows_model(app: &mut App) -> usize {
+    let model = shown_model(app).unwrap();
+    let settings = app.world().resource::<VoxelSettings>().clone();
+    let transition = app.world().resource::<TransitionSettings>().clone();
+    let targets = layout(&model, &settings, &transition);
+    let mut query = app.world_mut().query::<(&VoxelSlot, &Transform, &MeshTag, &Visibility)>();
+    let mut hidden = 0;
+    for (slot, transform, tag, visibility) in query.iter(app.world()) {
+        match targets.get(slot.0 as usize) {
+            Some(t) => {
+                assert_eq!(*visibility, Visibility::Inherited, "slot {} hidden", slot.0);
+                assert_eq!(transform.translation, t.position, "slot {} not on its cell", slot.0);
+                assert_eq!(unpack_color(tag.0), t.color, "slot {} colour", slot.0);
+            }
+            None => {
+                assert_eq!(*visibility, Visibility::Hidden, "spare slot {} shows", slot.0);
+                hidden += 1;
+            }
+        }
+    }
+    assert_eq!(app.world().resource::<VoxelPool>().visible, targets.len());
+    hidden
+}
+
+fn ready_app() -> App {
+    let mut app = test_app(AppArgs::default());
+    run_until(&mut app, Duration::from_secs(60), all_settled);
+    settle(&mut app);
+    app
+}
+
+fn positions(app: &mut App) -> HashMap<u32, Vec3> {
+    let mut q = app.world_mut().query::<(&VoxelSlot, &Transform)>();
+    q.iter(app.world()).map(|(s, t)| (s.0, t.translation)).collect()
+}
+
+#[test]
+fn after_the_longest_delay_and_duration_every_voxel_is_home() {
+    let mut app = ready_app();
+    app.init_resource::<Finished>();
+    app.add_systems(Update, count_finished);
+    // Drain the message of the start-up morph.
+    app.update();
+    app.update();
+    app.world_mut().resource_mut::<Finished>().0 = 0;
+    app.world_mut().write_message(LibraryRequest::Next);
+    // Longest delay + duration + count: 0.2 + 1.2 + margin, at 60 frames a second.
+    let t = app.world().resource::<TransitionSettings>().clone();
+    let frames = ((t.max_delay + t.base_duration + t.extra_duration).max(t.count_duration) * 60.0).ceil() as usize + 3;
+    let mut moving = 0;
+    for k in 0..frames {
+        app.update();
+        if k == 20 {
+            let mut tweens = app.world_mut().query::<&VoxelTween>();
+            moving = tweens.iter(app.world()).count();
+        }
+    }
+    assert!(moving > 100, "voxels were tweening mid-way ({moving})");
+    let mut tweens = app.world_mut().query::<&VoxelTween>();
+    assert_eq!(tweens.iter(app.world()).count(), 0, "finished tweens are removed");
+    assert_shows_model(&mut app);
+    assert_eq!(app.world().resource::<Finished>().0, 1, "TransitionFinished was sent once");
+}
+
+#[derive(Resource, Default)]
+struct Finished(usize);
+
+fn count_finished(mut messages: MessageReader<TransitionFinished>, mut finished: ResMut<Finished>) {
+    finished.0 += messages.read().count();
+}
+
+#[test]
+fn a_second_switch_half_way_starts_from_where_voxels_are() {
+    let mut app = ready_app();
+    app.world_mut().write_message(LibraryRequest::Next);
+    for _ in 0..25 {
+        app.update();
+    }
+    let before = positions(&mut app);
+    let old_bounds: HashMap<u32, f32> = {
+        let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelTween)>();
+        q.iter(app.world()).map(|(s, t)| (s.0, bound(t))).collect()
+    };
+    app.world_mut().write_message(LibraryRequest::Next);
+    app.update();
+    let after = positions(&mut app);
+    let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelTween)>();
+    let new_bounds: HashMap<u32, f32> = q.iter(app.world()).map(|(s, t)| (s.0, bound(t))).collect();
+    let dt = 1.0 / 60.0;
+    for (slot, p) in &after {
+        let jump = p.distance(before[slot]);
+        let limit = old_bounds.get(slot).copied().unwrap_or(0.0).max(new_bounds.get(slot).copied().unwrap_or(0.0)) * dt + 1e-4;
+        assert!(jump <= limit, "slot {slot} jumped {jump} (bound {limit})");
+    }
+    settle(&mut app);
+    assert_eq!(app.world().resource::<voxel_art::library::ModelLibrary>().current, 2);
+    assert_shows_model(&mut app);
+}
+
+/// The fastest a tween can move (units per second): back-out(s) starts at speed (s + 3) × distance / duration.
+fn bound(t: &VoxelTween) -> f32 {
+    (t.overshoot + 3.0) * t.from.distance(t.to) / t.duration
+}
+
+#[test]
+fn rapid_switching_keeps_entities_and_tweens_bounded() {
+    let mut app = ready_app();
+    let entities_before = app.world().entities().count_spawned() as usize;
+    let pool_before = app.world().resource::<VoxelPool>().slots.len();
+    for _ in 0..20 {
+        app.world_mut().write_message(LibraryRequest::Next);
+        app.update();
+        app.update();
+        let pool = app.world().resource::<VoxelPool>().slots.len();
+        let mut tweens = app.world_mut().query::<&VoxelTween>();
+        assert!(tweens.iter(app.world()).count() <= pool);
+        let mut anims = app.world_mut().query::<&bevy_tweening::TweenAnim>();
+        assert!(anims.iter(app.world()).count() <= 1, "one spin tween at most");
+    }
+    // Only pool growth (a bigger model) adds entities; tweens are components, not entities.
+    let pool_after = app.world().resource::<VoxelPool>().slots.len();
+    assert_eq!(app.world().entities().count_spawned() as usize, entities_before + pool_after - pool_before);
+    settle(&mut app);
+    assert_shows_model(&mut app);
+}
