@@ -1,13 +1,13 @@
-//! `cargo bench --bench frame`: CPU time per frame of the app's systems (no GPU) with 100k voxels, static
-//! and with every voxel's colour changing every frame. Mean and median of 300 frames after warm-up.
+//! `cargo bench --bench frame`: CPU time per frame of the app's systems (no GPU) with 100k voxels: static,
+//! with every voxel's colour changing every frame, and mid-morph (every voxel tweening). Mean and median.
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
-use bevy::time::TimeUpdateStrategy;
 use voxel_art::instancing::{VoxelPool, VoxelSlot};
 use voxel_art::library::{ModelEntry, ModelLibrary, ModelStatus};
+use voxel_art::transition::ActiveTransition;
 use voxel_art::voxel::shapes::uv_sphere;
 use voxel_art::voxel::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
 use voxel_art::voxelize::VoxelModel;
@@ -18,21 +18,15 @@ fn big_model() -> voxel_art::voxel::VoxelModel {
     voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(58), hollow: false, ..Default::default() }).expect("voxelize")
 }
 
-fn app_with(model: voxel_art::voxel::VoxelModel) -> App {
-    let mut app = App::new();
-    app.add_plugins((MinimalPlugins, TransformPlugin, AssetPlugin::default(), bevy::mesh::MeshPlugin));
-    app.init_resource::<ButtonInput<KeyCode>>();
-    app.init_resource::<ButtonInput<MouseButton>>();
-    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
-    app.add_plugins(voxel_art::LogicPlugin);
-    app.finish();
-    app.cleanup();
-    app.update();
-    let handle = app.world_mut().resource_mut::<Assets<VoxelModel>>().add(VoxelModel(model));
-    let mut library = app.world_mut().resource_mut::<ModelLibrary>();
-    library.entries.clear();
-    library.entries.push(ModelEntry {
-        name: "sphere".into(),
+/// About 100k voxels of another shape: a solid cube 46 cells wide.
+fn cube_model() -> voxel_art::voxel::VoxelModel {
+    let soup = TriangleSoup::from_mesh(&voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
+    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(46), hollow: false, ..Default::default() }).expect("voxelize")
+}
+
+fn entry(name: &str, handle: Handle<VoxelModel>) -> ModelEntry {
+    ModelEntry {
+        name: name.into(),
         asset_path: String::new(),
         gltf: Handle::default(),
         status: ModelStatus::Ready,
@@ -40,15 +34,27 @@ fn app_with(model: voxel_art::voxel::VoxelModel) -> App {
         voxels: Some(handle),
         voxels_generation: Some(0),
         voxelize_ms: 0.0,
-    });
+    }
+}
+
+fn settled(app: &App) -> bool {
+    app.world().resource::<VoxelPool>().shown.is_some() && app.world().resource::<ActiveTransition>().running.is_none()
+}
+
+fn app_with(models: Vec<voxel_art::voxel::VoxelModel>) -> App {
+    let mut app = voxel_art::headless::headless_app(voxel_art::args::AppArgs { no_shipped: true, ..Default::default() });
+    app.update();
+    let handles: Vec<_> = models.into_iter().map(|m| app.world_mut().resource_mut::<Assets<VoxelModel>>().add(VoxelModel(m))).collect();
+    let mut library = app.world_mut().resource_mut::<ModelLibrary>();
+    library.entries = handles.into_iter().enumerate().map(|(i, h)| entry(&format!("model {i}"), h)).collect();
     library.current = 0;
-    for _ in 0..600 {
+    for _ in 0..2_000 {
         app.update();
-        if app.world().resource::<VoxelPool>().shown.is_some() {
+        if settled(&app) {
             break;
         }
     }
-    assert!(app.world().resource::<VoxelPool>().shown.is_some(), "the model never showed");
+    assert!(settled(&app), "the model never settled");
     app
 }
 
@@ -58,8 +64,8 @@ fn recolor_everything(time: Res<Time>, mut voxels: Query<(&VoxelSlot, &mut MeshT
     voxels.par_iter_mut().for_each(|(slot, mut tag)| tag.0 = slot.0.wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000);
 }
 
-fn measure(app: &mut App, frames: usize) -> (f64, f64) {
-    for _ in 0..30 {
+fn measure(app: &mut App, warmup: usize, frames: usize) -> (f64, f64) {
+    for _ in 0..warmup {
         app.update();
     }
     let mut times: Vec<f64> = (0..frames)
@@ -75,14 +81,19 @@ fn measure(app: &mut App, frames: usize) -> (f64, f64) {
 }
 
 fn main() {
-    let model = big_model();
-    let n = model.voxels.len();
-    println!("voxels: {n}, threads: {}", bevy::tasks::available_parallelism());
-    let mut app = app_with(model.clone());
-    let (mean, median) = measure(&mut app, 300);
+    let (sphere, cube) = (big_model(), cube_model());
+    println!("voxels: sphere {}, cube {}; threads: {}", sphere.voxels.len(), cube.voxels.len(), bevy::tasks::available_parallelism());
+    let mut app = app_with(vec![sphere.clone()]);
+    let (mean, median) = measure(&mut app, 30, 300);
     println!("static voxels:        mean {mean:.2} ms/frame, median {median:.2} ms/frame");
-    let mut app = app_with(model);
+    let mut app = app_with(vec![sphere.clone()]);
     app.add_systems(Update, recolor_everything);
-    let (mean, median) = measure(&mut app, 300);
+    let (mean, median) = measure(&mut app, 30, 300);
     println!("recolour every frame: mean {mean:.2} ms/frame, median {median:.2} ms/frame");
+    // Mid-morph: frames 12..60 after a switch, when every voxel's delay (≤ 0.2 s) has passed.
+    let mut app = app_with(vec![sphere, cube]);
+    app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
+    let tweening = |app: &mut App| app.world_mut().query::<&voxel_art::transition::VoxelTween>().iter(app.world()).count();
+    let (mean, median) = measure(&mut app, 12, 48);
+    println!("mid-morph ({} tweening at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame", tweening(&mut app));
 }

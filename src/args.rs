@@ -17,6 +17,9 @@ pub struct AppArgs {
     /// Frames to run before the screenshot.
     #[arg(long, default_value_t = 120)]
     pub frames: u32,
+    /// Leave out the shipped models (show only the ones given).
+    #[arg(long)]
+    pub no_shipped: bool,
     /// Start with the model at this index of the list (0-based).
     #[arg(long, default_value_t = 0)]
     pub start: usize,
@@ -24,6 +27,9 @@ pub struct AppArgs {
     /// --frames from the switch (a frame of the morph).
     #[arg(long)]
     pub then: Option<usize>,
+    /// How voxels are matched to the next model's cells: height, morton or grid (also in the panel).
+    #[arg(long = "match", value_parser = ["height", "morton", "grid"])]
+    pub assignment: Option<String>,
 }
 
 impl AppArgs {

@@ -7,6 +7,7 @@
 
 pub mod args;
 mod camera;
+pub mod headless;
 pub mod input;
 pub mod instancing;
 pub mod library;
@@ -75,6 +76,11 @@ impl Plugin for AppPlugin {
                 .set(AssetPlugin { file_path: args::asset_root().display().to_string(), ..default() }),
         );
         app.insert_resource(self.args.clone());
+        if self.args.screenshot.is_some() {
+            // Screenshots step time by exactly 1/60 s a frame, so frame N is the same moment of an animation
+            // however slowly a software renderer draws.
+            app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(std::time::Duration::from_secs_f64(1.0 / 60.0)));
+        }
         // Render-side registration first (the voxel material's asset type comes from its MaterialPlugin).
         app.add_plugins((
             instancing::render_plugin,

@@ -160,7 +160,8 @@ impl ModelLibrary {
 /// Adds the shipped models (`assets/models`) and the command-line ones.
 fn populate(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>, args: Option<Res<crate::args::AppArgs>>) {
     let shipped = crate::args::asset_root().join("models");
-    for file in voxel_core::cli::expand_inputs(&[shipped]) {
+    let skip = args.as_ref().is_some_and(|a| a.no_shipped);
+    for file in voxel_core::cli::expand_inputs(&[shipped]).into_iter().filter(|_| !skip) {
         if let Some(name) = file.file_name() {
             let stem = file.file_stem().unwrap_or(name).to_string_lossy().into_owned();
             library.add(&asset_server, stem, format!("models/{}", name.to_string_lossy()));

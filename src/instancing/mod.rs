@@ -27,9 +27,15 @@ pub struct VoxelAssets {
     pub material: Handle<VoxelMaterial>,
 }
 
-/// The parent of every voxel (spinning it spins the model).
+/// The model's frame: its rotation is the model's spin. Voxels are not its children (a hierarchy of 100k
+/// children costs milliseconds of transform propagation a frame); their transforms are composed with it.
 #[derive(Component, Debug, Default, Reflect)]
 pub struct VoxelCloud;
+
+/// A voxel's world transform for cloud-space `position` and `scale` in a cloud turned by `rotation`.
+pub fn voxel_transform(rotation: Quat, position: Vec3, scale: Vec3) -> Transform {
+    Transform { translation: rotation * position, rotation, scale }
+}
 
 /// A voxel entity and its index in the pool.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
@@ -86,7 +92,7 @@ pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
         .collect()
 }
 
-fn voxel_bundle(assets: &VoxelAssets, slot: u32, cloud: Entity) -> impl Bundle {
+fn voxel_bundle(assets: &VoxelAssets, slot: u32) -> impl Bundle {
     (
         Name::new("voxel"),
         VoxelSlot(slot),
@@ -95,16 +101,14 @@ fn voxel_bundle(assets: &VoxelAssets, slot: u32, cloud: Entity) -> impl Bundle {
         MeshTag(0),
         Transform::default(),
         Visibility::Hidden,
-        ChildOf(cloud),
     )
 }
 
 /// Makes sure the pool has at least `count` slots.
 pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, assets: &VoxelAssets, count: usize) {
-    let Some(cloud) = pool.cloud else { return };
     while pool.slots.len() < count {
         let slot = pool.slots.len() as u32;
-        pool.slots.push(commands.spawn(voxel_bundle(assets, slot, cloud)).id());
+        pool.slots.push(commands.spawn(voxel_bundle(assets, slot)).id());
     }
 }
 
@@ -124,12 +128,16 @@ fn setup(
     commands.insert_resource(assets);
 }
 
-/// Lays the voxels out for `targets` at once: slot i takes target i, the rest are hidden.
-pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], voxels: &mut Query<(&VoxelSlot, &mut Transform, &mut MeshTag, &mut Visibility)>) {
+/// The voxels' query: slot, transform, colour, visibility (the cloud excluded).
+pub type VoxelQuery<'w, 's> = Query<'w, 's, (&'static VoxelSlot, &'static mut Transform, &'static mut MeshTag, &'static mut Visibility), Without<VoxelCloud>>;
+
+/// Lays the voxels out for `targets` at once (in a cloud turned by `rotation`): slot i takes target i, the
+/// rest are hidden.
+pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], rotation: Quat, voxels: &mut VoxelQuery) {
     for (slot, mut transform, mut tag, mut visibility) in voxels.iter_mut() {
         match targets.get(slot.0 as usize) {
             Some(t) => {
-                *transform = Transform::from_translation(t.position).with_scale(t.scale);
+                *transform = voxel_transform(rotation, t.position, t.scale);
                 tag.0 = pack_color(t.color);
                 visibility.set_if_neq(Visibility::Inherited);
             }
@@ -156,7 +164,7 @@ fn grow_for_current(mut commands: Commands, mut pool: ResMut<VoxelPool>, assets:
 }
 
 /// Placeholder boxes bob gently while nothing is voxelized yet.
-fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&VoxelSlot, &mut Transform)>) {
+fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>) {
     if pool.shown.is_some() {
         return;
     }

@@ -3,36 +3,13 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use bevy::asset::AssetPlugin;
-use bevy::image::{CompressedImageFormatSupport, CompressedImageFormats};
 use bevy::prelude::*;
-use bevy::time::TimeUpdateStrategy;
 use voxel_art::args::AppArgs;
 use voxel_art::library::{ModelLibrary, ModelStatus};
 
-/// The app under test: MinimalPlugins, assets and glTF loading, the logic plugins.
+/// The app under test: the headless app (logic plugins, glTF loading, manual time step).
 pub fn test_app(args: AppArgs) -> App {
-    let mut app = App::new();
-    app.register_asset_source(voxel_art::FILE_SOURCE, bevy::asset::io::AssetSourceBuilder::platform_default("/", None));
-    app.add_plugins((
-        MinimalPlugins,
-        TransformPlugin,
-        AssetPlugin { file_path: voxel_art::args::asset_root().display().to_string(), ..default() },
-        bevy::mesh::MeshPlugin,
-        bevy::image::ImagePlugin::default(),
-        bevy::world_serialization::WorldSerializationPlugin,
-        bevy::gltf::GltfPlugin::default(),
-    ));
-    app.init_asset::<StandardMaterial>();
-    app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
-    app.init_resource::<ButtonInput<KeyCode>>();
-    app.init_resource::<ButtonInput<MouseButton>>();
-    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
-    app.insert_resource(args);
-    app.add_plugins(voxel_art::LogicPlugin);
-    app.finish();
-    app.cleanup();
-    app
+    voxel_art::headless::headless_app(args)
 }
 
 /// Steps the app until `done` holds (panics after `limit` of wall time, printing the library).

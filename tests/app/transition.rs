@@ -6,7 +6,7 @@ use std::time::Duration;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use voxel_art::args::AppArgs;
-use voxel_art::instancing::{VoxelPool, VoxelSlot, unpack_color};
+use voxel_art::instancing::{VoxelCloud, VoxelPool, VoxelSlot, unpack_color, voxel_transform};
 use voxel_art::library::LibraryRequest;
 use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
 use voxel_art::settings::VoxelSettings;
@@ -35,13 +35,17 @@ pub fn assert_shows_model(app: &mut App) -> usize {
     let settings = app.world().resource::<VoxelSettings>().clone();
     let transition = app.world().resource::<TransitionSettings>().clone();
     let targets = layout(&model, &settings, &transition);
-    let mut query = app.world_mut().query::<(&VoxelSlot, &Transform, &MeshTag, &Visibility)>();
+    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
+    let mut query = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &GlobalTransform, &MeshTag, &Visibility), Without<VoxelCloud>>();
     let mut hidden = 0;
-    for (slot, transform, tag, visibility) in query.iter(app.world()) {
+    for (slot, transform, global, tag, visibility) in query.iter(app.world()) {
         match targets.get(slot.0 as usize) {
             Some(t) => {
                 assert_eq!(*visibility, Visibility::Inherited, "slot {} hidden", slot.0);
-                assert_eq!(transform.translation, t.position, "slot {} not on its cell", slot.0);
+                let expected = voxel_transform(turn, t.position, t.scale);
+                assert!(transform.translation.distance(expected.translation) < 1e-4, "slot {} not on its cell", slot.0);
+                assert!(global.translation().distance(expected.translation) < 1e-4, "slot {} drawn off its cell", slot.0);
+                assert_eq!(transform.scale, t.scale);
                 assert_eq!(unpack_color(tag.0), t.color, "slot {} colour", slot.0);
             }
             None => {
@@ -61,9 +65,11 @@ fn ready_app() -> App {
     app
 }
 
+/// Positions of the visible voxels in the cloud's (model) frame.
 fn positions(app: &mut App) -> HashMap<u32, Vec3> {
-    let mut q = app.world_mut().query::<(&VoxelSlot, &Transform)>();
-    q.iter(app.world()).map(|(s, t)| (s.0, t.translation)).collect()
+    let unturn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation.inverse();
+    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
+    q.iter(app.world()).filter(|(_, _, v)| **v != Visibility::Hidden).map(|(s, t, _)| (s.0, unturn * t.translation)).collect()
 }
 
 #[test]
@@ -119,7 +125,8 @@ fn a_second_switch_half_way_starts_from_where_voxels_are() {
     let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelTween)>();
     let new_bounds: HashMap<u32, f32> = q.iter(app.world()).map(|(s, t)| (s.0, bound(t))).collect();
     let dt = 1.0 / 60.0;
-    for (slot, p) in &after {
+    assert!(after.len() > 500);
+    for (slot, p) in after.iter().filter(|(slot, _)| before.contains_key(*slot)) {
         let jump = p.distance(before[slot]);
         let limit = old_bounds.get(slot).copied().unwrap_or(0.0).max(new_bounds.get(slot).copied().unwrap_or(0.0)) * dt + 1e-4;
         assert!(jump <= limit, "slot {slot} jumped {jump} (bound {limit})");
@@ -146,8 +153,6 @@ fn rapid_switching_keeps_entities_and_tweens_bounded() {
         let pool = app.world().resource::<VoxelPool>().slots.len();
         let mut tweens = app.world_mut().query::<&VoxelTween>();
         assert!(tweens.iter(app.world()).count() <= pool);
-        let mut anims = app.world_mut().query::<&bevy_tweening::TweenAnim>();
-        assert!(anims.iter(app.world()).count() <= 1, "one spin tween at most");
     }
     // Only pool growth (a bigger model) adds entities; tweens are components, not entities.
     let pool_after = app.world().resource::<VoxelPool>().slots.len();

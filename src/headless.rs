@@ -1,0 +1,38 @@
+//! The app without a window or GPU: `MinimalPlugins`, asset and glTF loading, the [`LogicPlugin`], and a
+//! fixed 1/60 s time step. Logic tests and the frame benchmark build on it.
+
+use std::time::Duration;
+
+use bevy::asset::AssetPlugin;
+use bevy::asset::io::AssetSourceBuilder;
+use bevy::image::{CompressedImageFormatSupport, CompressedImageFormats};
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+
+use crate::args::AppArgs;
+use crate::{FILE_SOURCE, LogicPlugin};
+
+/// A headless app with the logic plugins; input resources are plain (tests press keys by hand).
+pub fn headless_app(args: AppArgs) -> App {
+    let mut app = App::new();
+    app.register_asset_source(FILE_SOURCE, AssetSourceBuilder::platform_default("/", None));
+    app.add_plugins((
+        MinimalPlugins,
+        TransformPlugin,
+        AssetPlugin { file_path: crate::args::asset_root().display().to_string(), ..default() },
+        bevy::mesh::MeshPlugin,
+        bevy::image::ImagePlugin::default(),
+        bevy::world_serialization::WorldSerializationPlugin,
+        bevy::gltf::GltfPlugin::default(),
+    ));
+    app.init_asset::<StandardMaterial>();
+    app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
+    app.init_resource::<ButtonInput<KeyCode>>();
+    app.init_resource::<ButtonInput<MouseButton>>();
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
+    app.insert_resource(args);
+    app.add_plugins(LogicPlugin);
+    app.finish();
+    app.cleanup();
+    app
+}
