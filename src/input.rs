@@ -1,5 +1,6 @@
-//! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, H toggles the panel, Esc quits; a short click on
-//! the stage goes to the next model, while press-and-hold (or a drag) orbits.
+//! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, S cycles styles, F drops/reassembles (falling
+//! style), R toggles mouse repel, H toggles the panel, Esc quits; a short click on the stage goes to the next
+//! model, while press-and-hold (or a drag) orbits.
 
 use bevy::input::mouse::MouseButton;
 use bevy::prelude::*;
@@ -30,6 +31,10 @@ impl PointerOverUi {
     }
 }
 
+/// The ray under the mouse cursor in world space, when the cursor is over the stage (set by the camera).
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq)]
+pub struct CursorRay(pub Option<Ray3d>);
+
 /// A click on the stage (a short press and release without dragging), in window coordinates.
 #[derive(Message, Debug, Clone, Copy, PartialEq)]
 pub struct StageClick(pub Vec2);
@@ -59,6 +64,12 @@ fn keys(keys: Res<ButtonInput<KeyCode>>, mut requests: MessageWriter<LibraryRequ
     }
     if keys.just_pressed(KeyCode::KeyH) {
         settings.panel_open = !settings.panel_open;
+    }
+    if keys.just_pressed(KeyCode::KeyS) {
+        settings.style = settings.style.next();
+    }
+    if keys.just_pressed(KeyCode::KeyR) {
+        settings.repel = !settings.repel;
     }
     if keys.just_pressed(KeyCode::Escape) {
         exit.write(AppExit::Success);
@@ -108,6 +119,7 @@ fn click_to_next(mut clicks: MessageReader<StageClick>, mut requests: MessageWri
 
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<PointerOverUi>();
+    app.init_resource::<CursorRay>();
     app.add_message::<StageClick>();
     app.add_systems(Update, (keys, clicks, click_to_next).chain().in_set(AppSystems::Input));
 }

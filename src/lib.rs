@@ -2,7 +2,8 @@
 //!
 //! Plugins (one per module, `pub(super) fn plugin`): `library` (the model list), `voxelize` (async
 //! voxelization into [`voxelize::VoxelModel`] assets), `instancing` (one entity per voxel, one mesh, one
-//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `input`, and the render-side `stage`, `camera`, `ui`, `preview`,
+//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `style` (Lego, bubbles,
+//! falling, mouse repel), `input`, and the render-side `stage`, `camera`, `ui`, `preview`,
 //! `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU, for tests.
 
 pub mod args;
@@ -16,6 +17,7 @@ pub mod rng;
 mod screenshot;
 pub mod settings;
 mod stage;
+pub mod style;
 pub mod transition;
 mod ui;
 pub mod voxelize;
@@ -49,7 +51,7 @@ pub struct LogicPlugin;
 impl Plugin for LogicPlugin {
     fn build(&self, app: &mut App) {
         app.configure_sets(Update, (AppSystems::Input, AppSystems::Simulate, AppSystems::Animate, AppSystems::Sync).chain());
-        app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, transition::plugin, input::plugin));
+        app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, transition::plugin, style::plugin, input::plugin));
     }
 }
 

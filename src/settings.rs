@@ -9,17 +9,37 @@ pub enum Style {
     /// Rounded boxes (the article's look).
     #[default]
     RoundedBoxes,
+    /// Lego bricks: studs on top, cells 1.2× taller than wide, shiny plastic.
+    Lego,
+    /// Glossy bubbles that wobble and burst near the cursor.
+    Bubbles,
+    /// Voxels drop, bounce and pile up on the floor; F (or another model) reassembles them.
+    Falling,
 }
 
 impl Style {
-    /// Every style, in the order the panel lists them.
-    pub const ALL: [Style; 1] = [Style::RoundedBoxes];
+    /// Every style, in the order the panel lists them (and S cycles).
+    pub const ALL: [Style; 4] = [Style::RoundedBoxes, Style::Lego, Style::Bubbles, Style::Falling];
 
     /// The panel's label.
     pub fn label(self) -> &'static str {
         match self {
             Style::RoundedBoxes => "Rounded boxes",
+            Style::Lego => "Lego bricks",
+            Style::Bubbles => "Bubbles",
+            Style::Falling => "Falling",
         }
+    }
+
+    /// The next style (S key).
+    pub fn next(self) -> Style {
+        let i = Style::ALL.iter().position(|s| *s == self).unwrap_or(0);
+        Style::ALL[(i + 1) % Style::ALL.len()]
+    }
+
+    /// Cell height over cell width for this style.
+    pub fn cell_height_ratio(self) -> f32 {
+        if self == Style::Lego { 1.2 } else { 1.0 }
     }
 }
 
@@ -46,6 +66,12 @@ pub struct VoxelSettings {
     pub style: Style,
     /// Whether the side panel shows.
     pub panel_open: bool,
+    /// Voxels near the cursor are pushed away (R toggles).
+    pub repel: bool,
+    /// Repel radius around the cursor ray, in model units.
+    pub repel_radius: f32,
+    /// How far a voxel on the ray is pushed, as a fraction of the radius.
+    pub repel_strength: f32,
 }
 
 impl Default for VoxelSettings {
@@ -60,6 +86,9 @@ impl Default for VoxelSettings {
             speed: 1.0,
             style: Style::RoundedBoxes,
             panel_open: true,
+            repel: true,
+            repel_radius: 1.2,
+            repel_strength: 0.8,
         }
     }
 }
@@ -72,6 +101,7 @@ impl VoxelSettings {
     pub fn voxelize_options(&self) -> VoxelizeOptions {
         VoxelizeOptions {
             grid: GridSize::Cell(self.grid_size.clamp(*Self::GRID_RANGE.start(), *Self::GRID_RANGE.end())),
+            cell_height_ratio: self.style.cell_height_ratio(),
             fill: self.fill,
             hollow: self.hollow,
             pastel: self.pastel,

@@ -143,8 +143,8 @@ fn place_floor(library: Res<ModelLibrary>, models: Res<Assets<VoxelModel>>, time
         .current_entry()
         .and_then(|e| e.voxels.as_ref())
         .and_then(|h| models.get(h))
-        .map_or(-3.5, |m| m.0.spec.origin[1]);
-    let target = bottom - 1.0;
+        .map_or(-4.5, |m| crate::instancing::floor_height(&m.0));
+    let target = bottom;
     let k = 1.0 - (-4.0 * time.delta_secs()).exp();
     floor.translation.y += (target - floor.translation.y) * k;
 }

@@ -13,7 +13,7 @@ use bevy::prelude::*;
 
 use crate::AppSystems;
 use crate::instancing::{
-    PLACEHOLDER_COUNT, VoxelCloud, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
+    PLACEHOLDER_COUNT, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
     voxel_transform,
 };
 use crate::library::{ModelLibrary, ModelStatus};
@@ -151,6 +151,10 @@ impl VoxelTween {
     }
 }
 
+/// The transition's systems (in `AppSystems::Animate`); styles run after them.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TransitionSystems;
+
 /// Sent when every voxel of a transition has arrived.
 #[derive(Message, Debug, Clone, PartialEq)]
 pub struct TransitionFinished {
@@ -171,6 +175,8 @@ pub struct ActiveTransition {
     pub spin: (f32, f32),
     /// Seconds the spin takes.
     pub spin_duration: f32,
+    /// Set to morph back to the shown model's cells from wherever voxels are (after falling).
+    pub restart: bool,
 }
 
 impl ActiveTransition {
@@ -231,7 +237,7 @@ pub fn plan(
     new: &[VoxelTarget],
     settings: &TransitionSettings,
     rng: &mut Rng,
-) -> Option<VoxelTween> {
+) -> Option<(VoxelTween, VoxelHome)> {
     let new_count = new.len();
     if i >= old_count.max(new_count) || new.is_empty() {
         return None;
@@ -240,9 +246,9 @@ pub fn plan(
     let delay = settings.max_delay * rng.f32();
     let color_delay = settings.color_delay_factor * rng.f32() * duration;
     let (mut from, mut from_scale, mut color_from, _) = now;
-    let (to, to_scale, color_to, show_at, hide_at);
+    let (to, to_scale, color_to, part, show_at, hide_at);
     if i < new_count {
-        (to, to_scale, color_to) = (new[i].position, new[i].scale, new[i].color);
+        (to, to_scale, color_to, part) = (new[i].position, new[i].scale, new[i].color, new[i].part);
         if i >= old_count {
             // A voxel joining the model: it comes out of a random occupied cell of the old one and shows up as
             // the visible count grows.
@@ -258,12 +264,13 @@ pub fn plan(
     } else {
         // A surplus voxel: it flies into a random occupied cell and hides as the visible count shrinks.
         let target = new[rng.below(new_count)];
-        (to, to_scale, color_to) = (target.position, target.scale, target.color);
+        (to, to_scale, color_to, part) = (target.position, target.scale, target.color, target.part);
         show_at = None;
         let ratio = (old_count - i) as f32 / (old_count - new_count) as f32;
         hide_at = Some(settings.count_duration * ratio);
     }
-    Some(VoxelTween {
+    let home = VoxelHome { position: to, scale: to_scale, part };
+    let tween = VoxelTween {
         from,
         to,
         from_scale,
@@ -279,7 +286,8 @@ pub fn plan(
         elapsed: 0.0,
         overshoot: settings.overshoot,
         spin_end: settings.spin_duration,
-    })
+    };
+    Some((tween, home))
 }
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
@@ -300,9 +308,10 @@ fn start(
     let wanted = library.current_entry().filter(|e| e.status == ModelStatus::Ready).and_then(|e| e.voxels.as_ref());
     let Some((id, model)) = wanted.and_then(|h| models.get(h).map(|m| (h.id(), m))) else { return };
     let resized = last_box_size.is_some_and(|b| b != settings.box_size);
-    if (pool.shown == Some(id) && !resized) || voxels.iter().len() < model.0.voxels.len() {
+    if (pool.shown == Some(id) && !resized && !active.restart) || voxels.iter().len() < model.0.voxels.len() {
         return;
     }
+    active.restart = false;
     *last_box_size = Some(settings.box_size);
     let new = layout(&model.0, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
@@ -320,9 +329,9 @@ fn start(
     let mut end = 0.0f32;
     for (entity, slot, now) in &slots {
         match plan(*slot as usize, *now, old_count, &old, &new, &transition, &mut rng) {
-            Some(tween) => {
+            Some((tween, home)) => {
                 end = end.max(tween.end());
-                commands.entity(*entity).insert(tween);
+                commands.entity(*entity).insert((tween, home));
             }
             None => {
                 commands.entity(*entity).remove::<VoxelTween>().insert(Visibility::Hidden);
@@ -425,7 +434,7 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<ActiveTransition>();
     app.add_message::<TransitionFinished>();
     app.register_type::<TransitionSettings>();
-    app.add_systems(Update, (placeholder, start, step).chain().in_set(AppSystems::Animate));
+    app.add_systems(Update, (placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems));
 }
 
 #[cfg(test)]
@@ -447,7 +456,7 @@ mod tests {
     #[test]
     fn orders_put_layers_and_neighbourhoods_together() {
         let mut t: Vec<VoxelTarget> = [[0.0, 2.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 1.0]]
-            .map(|p| VoxelTarget { position: Vec3::from(p), scale: Vec3::ONE, color: [0; 4] })
+            .map(|p| VoxelTarget { position: Vec3::from(p), scale: Vec3::ONE, color: [0; 4], part: 0 })
             .to_vec();
         order_targets(&mut t, Assignment::Height);
         assert_eq!(t.iter().map(|t| t.position.y).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0]);

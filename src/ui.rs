@@ -57,6 +57,12 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
     });
     ui.checkbox(&mut settings.hollow, "hollow (only visible voxels)");
     ui.checkbox(&mut settings.pastel, "pastel colours");
+    ui.checkbox(&mut settings.repel, "mouse repel (R)");
+    ui.add_enabled(settings.repel, egui::Slider::new(&mut settings.repel_radius, 0.2..=4.0).text("repel radius"));
+    ui.add_enabled(settings.repel, egui::Slider::new(&mut settings.repel_strength, 0.0..=2.0).text("repel strength"));
+    if settings.style == Style::Falling {
+        ui.label("F: drop / reassemble");
+    }
 }
 
 fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
@@ -150,7 +156,7 @@ fn panel(
                 ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
             }
             ui.separator();
-            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · H: panel · Esc: quit").small());
+            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · F: drop · R: repel · H: panel · Esc: quit").small());
         });
     });
     // Only touch the resource when something changed, so change detection means "edited".

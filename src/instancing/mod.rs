@@ -63,6 +63,34 @@ pub struct VoxelTarget {
     pub scale: Vec3,
     /// sRGB RGBA8.
     pub color: [u8; 4],
+    /// Source part of the model (styles may animate parts differently).
+    pub part: u32,
+}
+
+/// Where a voxel belongs in the model shown: its cell centre (cloud space), box scale and source part. The
+/// transition sets it; styles animate around it.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
+pub struct VoxelHome {
+    /// Cell centre in the cloud's frame.
+    pub position: Vec3,
+    /// Box scale.
+    pub scale: Vec3,
+    /// Source part index.
+    pub part: u32,
+}
+
+/// Mouse-repel displacement of a voxel (world space) and its spring velocity.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
+pub struct RepelOffset {
+    /// Current displacement.
+    pub offset: Vec3,
+    /// Current velocity of the displacement.
+    pub velocity: Vec3,
+}
+
+/// The floor height under a model (a little below its lowest cell).
+pub fn floor_height(model: &voxel_core::VoxelModel) -> f32 {
+    model.spec.origin[1] - 1.0
 }
 
 /// The voxel layout of `model` with boxes `box_size` of a cell.
@@ -71,7 +99,7 @@ pub fn targets_for(model: &voxel_core::VoxelModel, box_size: f32) -> Vec<VoxelTa
     model
         .voxels
         .iter()
-        .map(|v| VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color })
+        .map(|v| VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color, part: v.part })
         .collect()
 }
 
@@ -87,7 +115,7 @@ pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
             let mut coord = || ((rng.f32() - 0.5) * 6.0 / cell).round() * cell;
             let position = Vec3::new(coord(), coord(), coord());
             let color = Color::from(Hsla::new(rng.f32() * 360.0, 0.8, 0.8, 1.0)).to_srgba().to_u8_array();
-            VoxelTarget { position, scale: Vec3::splat(cell), color }
+            VoxelTarget { position, scale: Vec3::splat(cell), color, part: 0 }
         })
         .collect()
 }
@@ -99,6 +127,8 @@ fn voxel_bundle(assets: &VoxelAssets, slot: u32) -> impl Bundle {
         Mesh3d(assets.mesh.clone()),
         MeshMaterial3d(assets.material.clone()),
         MeshTag(0),
+        VoxelHome::default(),
+        RepelOffset::default(),
         Transform::default(),
         Visibility::Hidden,
     )
@@ -175,24 +205,15 @@ fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&
     }
 }
 
-/// Rebuilds the voxel mesh when the roundness changes.
-fn update_mesh(settings: Res<VoxelSettings>, assets: Option<Res<VoxelAssets>>, mut meshes: ResMut<Assets<Mesh>>, mut last: Local<Option<f32>>) {
-    let Some(assets) = assets else { return };
-    if last.is_some_and(|r| r != settings.roundness) {
-        let _ = meshes.insert(&assets.mesh, mesh::rounded_box(settings.roundness, 2));
-    }
-    *last = Some(settings.roundness);
-}
-
 /// Logic: the pool and its layout (no GPU needed).
 pub(super) fn plugin(app: &mut App) {
     if !app.world().contains_resource::<Assets<VoxelMaterial>>() {
         app.init_asset::<VoxelMaterial>();
     }
     app.init_resource::<VoxelPool>();
-    app.register_type::<VoxelSlot>().register_type::<VoxelCloud>();
+    app.register_type::<VoxelSlot>().register_type::<VoxelCloud>().register_type::<VoxelHome>().register_type::<RepelOffset>();
     app.add_systems(Startup, setup);
-    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate), update_mesh.in_set(AppSystems::Sync)));
+    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate)));
 }
 
 /// Rendering: the material's pipeline.

@@ -5,4 +5,5 @@ mod common;
 mod harness;
 mod logic;
 mod render;
+mod styles;
 mod transition;

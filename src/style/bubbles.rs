@@ -1,0 +1,169 @@
+//! Bubbles: every voxel is a glossy sphere wobbling around its cell with its own phase (parts wobble by
+//! different amounts); bubbles near the cursor burst — a quick swell, then gone — and re-form at their cell
+//! after a short random delay with a pop-in.
+
+use bevy::prelude::*;
+
+use crate::input::CursorRay;
+use crate::instancing::{VoxelCloud, VoxelHome, VoxelPool, VoxelSlot};
+use crate::rng::Rng;
+use crate::settings::{Style, VoxelSettings};
+use crate::transition::back_out;
+
+use super::Settled;
+
+/// Timings of a burst.
+#[derive(Resource, Clone, Debug, PartialEq, Reflect)]
+#[reflect(Resource)]
+pub struct BubbleSettings {
+    /// Seconds a bubble swells before vanishing.
+    pub burst: f32,
+    /// The shortest wait before it re-forms.
+    pub reform_min: f32,
+    /// The longest wait before it re-forms.
+    pub reform_max: f32,
+    /// Seconds the pop-in takes.
+    pub form: f32,
+    /// Wobble amplitude as a fraction of the cell.
+    pub wobble: f32,
+}
+
+impl Default for BubbleSettings {
+    fn default() -> Self {
+        Self { burst: 0.12, reform_min: 0.4, reform_max: 1.5, form: 0.35, wobble: 0.12 }
+    }
+}
+
+/// Where a bubble is in its life.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BubbleState {
+    /// Wobbling at its cell.
+    Whole,
+    /// Swelling for this many seconds so far.
+    Bursting(f32),
+    /// Gone; re-forms after this many more seconds.
+    Gone(f32),
+    /// Popping back in for this many seconds so far.
+    Forming(f32),
+}
+
+/// A voxel's bubble: its wobble phase and burst state.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Bubble {
+    /// Wobble phase (radians).
+    pub phase: f32,
+    /// Burst state.
+    pub state: BubbleState,
+}
+
+impl Bubble {
+    /// The wobble offset (fraction of a cell) at time `t` for a voxel of `part`.
+    pub fn wobble(&self, t: f32, part: u32, amplitude: f32) -> Vec3 {
+        // Per-part motion: parts wobble by different amounts and speeds.
+        let a = amplitude * (1.0 + 0.6 * (part % 3) as f32);
+        let w = 1.0 + 0.35 * (part % 4) as f32;
+        let p = self.phase;
+        Vec3::new((t * 1.7 * w + p).sin(), (t * 2.3 * w + p * 1.3).sin(), (t * 1.9 * w + p * 0.7).cos()) * a
+    }
+
+    /// Scale factor and visibility now.
+    pub fn scale(&self, timing: &BubbleSettings) -> (f32, bool) {
+        match self.state {
+            BubbleState::Whole => (1.0, true),
+            BubbleState::Bursting(t) => (1.0 + 0.6 * (t / timing.burst).min(1.0), true),
+            BubbleState::Gone(_) => (0.0, false),
+            BubbleState::Forming(t) => (back_out(t / timing.form, 2.0).max(0.0), true),
+        }
+    }
+}
+
+/// Gives every voxel a bubble when the style turns to bubbles, and takes them away after.
+pub(super) fn enter_and_leave(
+    mut commands: Commands,
+    settings: Res<VoxelSettings>,
+    pool: Res<VoxelPool>,
+    mut voxels: Query<(Entity, &VoxelSlot, Has<Bubble>, &mut Visibility)>,
+) {
+    if !settings.is_changed() && !pool.is_changed() {
+        return;
+    }
+    let want = settings.style == Style::Bubbles;
+    for (entity, slot, has, mut visibility) in &mut voxels {
+        if want && !has {
+            let phase = Rng::new(u64::from(slot.0) ^ 0xb0bb1e).f32() * std::f32::consts::TAU;
+            commands.entity(entity).insert(Bubble { phase, state: BubbleState::Whole });
+        } else if !want && has {
+            commands.entity(entity).remove::<Bubble>();
+            // A bubble that had burst comes back as a voxel of the model.
+            if (slot.0 as usize) < pool.visible {
+                visibility.set_if_neq(Visibility::Inherited);
+            }
+        }
+    }
+}
+
+/// Advances bursts; whole bubbles near the cursor burst.
+pub(super) fn burst(
+    time: Res<Time>,
+    settings: Res<VoxelSettings>,
+    timing: Res<BubbleSettings>,
+    ray: Res<CursorRay>,
+    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
+    mut bubbles: Query<(&VoxelSlot, &VoxelHome, &mut Bubble), Settled>,
+    mut frame: Local<u64>,
+) {
+    *frame += 1;
+    let dt = time.delta_secs() * settings.speed;
+    let turn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
+    let radius = settings.repel_radius * 0.6;
+    let seed = *frame;
+    bubbles.par_iter_mut().for_each(|(slot, home, mut bubble)| {
+        let next = match bubble.state {
+            BubbleState::Whole => {
+                let near = ray.0.is_some_and(|r| {
+                    let p = turn * home.position;
+                    let along = (p - r.origin).dot(*r.direction).max(0.0);
+                    p.distance(r.origin + *r.direction * along) < radius
+                });
+                if near { BubbleState::Bursting(0.0) } else { BubbleState::Whole }
+            }
+            BubbleState::Bursting(t) if t + dt >= timing.burst => {
+                let wait = timing.reform_min + (timing.reform_max - timing.reform_min) * Rng::new(seed ^ u64::from(slot.0) << 20).f32();
+                BubbleState::Gone(wait)
+            }
+            BubbleState::Bursting(t) => BubbleState::Bursting(t + dt),
+            BubbleState::Gone(left) if left - dt <= 0.0 => BubbleState::Forming(0.0),
+            BubbleState::Gone(left) => BubbleState::Gone(left - dt),
+            BubbleState::Forming(t) if t + dt >= timing.form => BubbleState::Whole,
+            BubbleState::Forming(t) => BubbleState::Forming(t + dt),
+        };
+        if next != bubble.state {
+            bubble.state = next;
+        }
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_burst_swells_vanishes_and_pops_back() {
+        let t = BubbleSettings::default();
+        let b = |state| Bubble { phase: 0.0, state };
+        assert_eq!(b(BubbleState::Whole).scale(&t), (1.0, true));
+        assert!(b(BubbleState::Bursting(t.burst)).scale(&t).0 > 1.5);
+        assert_eq!(b(BubbleState::Gone(0.3)).scale(&t), (0.0, false));
+        assert!(b(BubbleState::Forming(0.0)).scale(&t).0.abs() < 1e-6);
+        assert!((b(BubbleState::Forming(t.form)).scale(&t).0 - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn parts_wobble_differently_and_stay_small() {
+        let bubble = Bubble { phase: 0.4, state: BubbleState::Whole };
+        let a = bubble.wobble(1.0, 0, 0.12);
+        let b = bubble.wobble(1.0, 2, 0.12);
+        assert!(a.max_element() <= 0.12 + 1e-6 && b.length() > a.length() * 0.5);
+        assert_ne!(a, b);
+    }
+}

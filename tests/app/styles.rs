@@ -1,0 +1,183 @@
+//! Styles: falling piles, mouse repel, bubbles bursting and re-forming, Lego's taller cells.
+
+use std::time::Duration;
+
+use bevy::prelude::*;
+use voxel_art::args::AppArgs;
+use voxel_art::input::CursorRay;
+use voxel_art::instancing::{VoxelCloud, VoxelHome, VoxelSlot};
+use voxel_art::library::LibraryRequest;
+use voxel_art::settings::{Style, VoxelSettings};
+use voxel_art::style::bubbles::{Bubble, BubbleSettings, BubbleState};
+use voxel_art::style::falling::FallingPile;
+
+use crate::harness::{all_settled, run_until, test_app};
+use crate::logic::shown_model;
+use crate::transition::{assert_shows_model, settle};
+
+/// A settled app showing the cherry (index 2).
+fn cherry_app() -> App {
+    let mut app = test_app(AppArgs::default());
+    run_until(&mut app, Duration::from_secs(60), all_settled);
+    // Settle first: a switch mid-spin would make the model's final angle depend on load timing.
+    settle(&mut app);
+    app.world_mut().write_message(LibraryRequest::Select(2));
+    settle(&mut app);
+    app
+}
+
+fn set_style(app: &mut App, style: Style) {
+    app.world_mut().resource_mut::<VoxelSettings>().style = style;
+}
+
+/// World position of a slot's home cell.
+fn home_world(app: &mut App, slot: u32) -> Vec3 {
+    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
+    let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelHome)>();
+    let home = q.iter(app.world()).find(|(s, _)| s.0 == slot).unwrap().1;
+    turn * home.position
+}
+
+fn translation(app: &mut App, slot: u32) -> Vec3 {
+    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform), Without<VoxelCloud>>();
+    q.iter(app.world()).find(|(s, _)| s.0 == slot).unwrap().1.translation
+}
+
+fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
+    let mut app = cherry_app();
+    for _ in 0..seed_runs {
+        app.update();
+    }
+    set_style(&mut app, Style::Falling);
+    for _ in 0..3 {
+        app.update();
+    }
+    assert!(app.world().get_resource::<FallingPile>().is_some(), "the voxels let go");
+    // Ten simulated seconds: 600 steps of 1/60 s.
+    while app.world().resource::<FallingPile>().pile.steps < 600 {
+        app.update();
+    }
+    let pile = app.world().resource::<FallingPile>().pile.clone();
+    assert!(pile.max_speed() < 0.05, "still moving at {}", pile.max_speed());
+    let floor = pile.params.floor + pile.params.radius;
+    assert!(pile.positions.iter().all(|p| p.y >= floor - 1e-4), "a voxel sank below the floor");
+    let size = {
+        let model = shown_model(&app).unwrap();
+        model.spec.cell[0] * app.world().resource::<VoxelSettings>().box_size
+    };
+    assert!(pile.max_overlap(size) < 0.05, "voxels overlap by {} of a cell", pile.max_overlap(size));
+    // The pile lies under the model.
+    let model = shown_model(&app).unwrap();
+    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
+    let model_com = model.voxels.iter().map(|v| turn * Vec3::from(model.center(v))).sum::<Vec3>() / model.voxels.len() as f32;
+    let pile_com = pile.positions.iter().sum::<Vec3>() / pile.positions.len() as f32;
+    let sideways = Vec2::new(pile_com.x - model_com.x, pile_com.z - model_com.z).length();
+    assert!(sideways < 1.0, "the pile's centre is {sideways} from under the model's");
+    assert!(pile_com.y < model_com.y);
+    // Drawn where simulated.
+    let mut q = app.world_mut().query::<(&voxel_art::style::falling::Falling, &GlobalTransform)>();
+    for (falling, global) in q.iter(app.world()) {
+        assert!(global.translation().distance(pile.positions[falling.0 as usize]) < 1e-5);
+    }
+    // F calls them back to their cells.
+    app.world_mut().resource_mut::<ButtonInput<KeyCode>>().press(KeyCode::KeyF);
+    app.update();
+    app.world_mut().resource_mut::<ButtonInput<KeyCode>>().clear();
+    settle(&mut app);
+    assert!(app.world().get_resource::<FallingPile>().is_none());
+    assert_shows_model(&mut app);
+    pile.positions.clone()
+}
+
+#[test]
+fn falling_voxels_pile_up_at_rest_and_reassemble() {
+    let first = drop_pile(0);
+    let again = drop_pile(0);
+    assert_eq!(first, again, "the same seed gives the same pile");
+}
+
+#[test]
+fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
+    let mut app = cherry_app();
+    let (radius, strength) = {
+        let s = app.world().resource::<VoxelSettings>();
+        (s.repel_radius, s.repel_strength)
+    };
+    let target = home_world(&mut app, 0);
+    let far_slot = {
+        let mut q = app.world_mut().query::<&VoxelSlot>();
+        let slots: Vec<u32> = q.iter(app.world()).map(|s| s.0).filter(|s| (*s as usize) < app.world().resource::<voxel_art::instancing::VoxelPool>().visible).collect();
+        *slots.iter().max_by(|a, b| home_world(&mut app, **a).distance(target).total_cmp(&home_world(&mut app, **b).distance(target))).unwrap()
+    };
+    let far_before = translation(&mut app, far_slot);
+    app.insert_resource(CursorRay(Some(Ray3d::new(target + Vec3::Z * 20.0, Dir3::NEG_Z))));
+    for _ in 0..60 {
+        app.update();
+    }
+    let pushed = translation(&mut app, 0).distance(target);
+    assert!(pushed >= 0.9 * radius * strength, "pushed {pushed}, expected about {}", radius * strength);
+    assert_eq!(translation(&mut app, far_slot), far_before, "a far voxel moved");
+    app.insert_resource(CursorRay(None));
+    for _ in 0..120 {
+        app.update();
+    }
+    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
+    let shown: Vec<(u32, Vec3)> = q.iter(app.world()).filter(|(_, _, v)| **v != Visibility::Hidden).map(|(s, t, _)| (s.0, t.translation)).collect();
+    for (slot, at) in shown {
+        let home = home_world(&mut app, slot);
+        assert!(at.distance(home) < 1e-3, "slot {slot} did not spring back ({})", at.distance(home));
+    }
+}
+
+#[test]
+fn a_burst_bubble_vanishes_and_reforms_at_its_cell() {
+    let mut app = cherry_app();
+    app.world_mut().resource_mut::<VoxelSettings>().repel = false;
+    set_style(&mut app, Style::Bubbles);
+    for _ in 0..3 {
+        app.update();
+    }
+    let timing = app.world().resource::<BubbleSettings>().clone();
+    let state = |app: &mut App| {
+        let mut q = app.world_mut().query::<(&VoxelSlot, &Bubble, &Visibility)>();
+        q.iter(app.world()).find(|(s, _, _)| s.0 == 0).map(|(_, b, v)| (b.state, *v)).unwrap()
+    };
+    assert_eq!(state(&mut app).0, BubbleState::Whole);
+    let at = home_world(&mut app, 0);
+    app.insert_resource(CursorRay(Some(Ray3d::new(at + Vec3::Z * 20.0, Dir3::NEG_Z))));
+    app.update();
+    app.insert_resource(CursorRay(None));
+    assert!(matches!(state(&mut app).0, BubbleState::Bursting(_)));
+    let burst_frames = (timing.burst * 60.0).ceil() as usize + 2;
+    for _ in 0..burst_frames {
+        app.update();
+    }
+    let (s, visibility) = state(&mut app);
+    assert!(matches!(s, BubbleState::Gone(_)), "{s:?}");
+    assert_eq!(visibility, Visibility::Hidden);
+    let back_frames = ((timing.reform_max + timing.form) * 60.0).ceil() as usize + 2;
+    for _ in 0..back_frames {
+        app.update();
+    }
+    let (s, visibility) = state(&mut app);
+    assert_eq!(s, BubbleState::Whole, "re-formed within the configured delay");
+    assert_eq!(visibility, Visibility::Inherited);
+    let cell = app.world().resource::<VoxelSettings>().grid_size;
+    let drift = translation(&mut app, 0).distance(home_world(&mut app, 0));
+    assert!(drift < cell, "the bubble wobbles around its cell ({drift})");
+}
+
+#[test]
+fn lego_uses_taller_cells_and_morphs_in_and_out() {
+    let mut app = cherry_app();
+    set_style(&mut app, Style::Lego);
+    run_until(&mut app, Duration::from_secs(60), |app| shown_model(app).is_some_and(|m| (m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5));
+    settle(&mut app);
+    assert_shows_model(&mut app);
+    let model = shown_model(&app).unwrap();
+    assert!((model.spec.cell[1] / model.spec.cell[0] - 1.2).abs() < 1e-5);
+    set_style(&mut app, Style::RoundedBoxes);
+    run_until(&mut app, Duration::from_secs(60), |app| shown_model(app).is_some_and(|m| m.spec.cell[1] == m.spec.cell[0]));
+    settle(&mut app);
+    assert_shows_model(&mut app);
+}
