@@ -27,6 +27,9 @@ pub struct AppArgs {
     /// --frames from the switch (a frame of the morph).
     #[arg(long)]
     pub then: Option<usize>,
+    /// Start in this style: boxes, lego, bubbles or falling (S cycles them).
+    #[arg(long, value_parser = ["boxes", "lego", "bubbles", "falling"])]
+    pub style: Option<String>,
     /// How voxels are matched to the next model's cells: height, morton or grid (also in the panel).
     #[arg(long = "match", value_parser = ["height", "morton", "grid"])]
     pub assignment: Option<String>,

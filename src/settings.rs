@@ -112,6 +112,17 @@ impl VoxelSettings {
     }
 }
 
+/// Applies `--style` from the command line.
+fn style_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<VoxelSettings>) {
+    settings.style = match args.as_ref().and_then(|a| a.style.as_deref()) {
+        Some("lego") => Style::Lego,
+        Some("bubbles") => Style::Bubbles,
+        Some("falling") => Style::Falling,
+        _ => Style::RoundedBoxes,
+    };
+}
+
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelSettings>();
+    app.add_systems(PreStartup, style_from_args);
 }

@@ -66,7 +66,8 @@ fn apply_look(
 }
 
 /// Places settled voxels: home cell (turned with the model) + bubble wobble, + repel offset; bubble scale and
-/// visibility. Runs only while something moves them (and once after, to put them back).
+/// visibility. Runs only while something moves them (and once after, to put them back); without bubbles it
+/// touches only the voxels whose repel offset changed.
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn compose(
     time: Res<Time>,
@@ -75,7 +76,7 @@ fn compose(
     repel: Res<RepelActive>,
     cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
     pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &VoxelHome, &RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
+    mut voxels: Query<(&VoxelSlot, &VoxelHome, Ref<RepelOffset>, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
     mut was_active: Local<bool>,
 ) {
     let bubbles = settings.style == Style::Bubbles;
@@ -89,7 +90,8 @@ fn compose(
     let t = time.elapsed_secs() * settings.speed;
     let in_model = pool.visible;
     voxels.par_iter_mut().for_each(|(slot, home, repel, bubble, mut transform, mut global, mut visibility)| {
-        if slot.0 as usize >= in_model {
+        // Without bubbles only voxels whose repel offset moved need placing.
+        if slot.0 as usize >= in_model || (bubble.is_none() && !repel.is_changed()) {
             return;
         }
         let cell = home.scale.max_element();

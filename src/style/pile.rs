@@ -43,7 +43,7 @@ impl PileParams {
             friction: 0.25,
             damping: 1.5,
             dt: 1.0 / 60.0,
-            iterations: 8,
+            iterations: 4,
             sleep_speed: cell * 2.0,
             sleep_steps: 20,
         }
@@ -106,23 +106,66 @@ impl Grid {
         grid
     }
 
-    /// Calls `f` with every sphere index in the 27 cells around `p` (ascending cell, then index order).
+    /// Calls `f` with every sphere index in the 27 cells around `p` (ascending cell, then index order). The
+    /// three cells along z of each (x, y) row are adjacent in the cell order: one contiguous run per row.
     fn for_neighbours(&self, p: Vec3, mut f: impl FnMut(usize)) {
         let c = self.cell_of(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let n = [c[0] + dx, c[1] + dy, c[2] + dz];
-                    if (0..3).any(|a| n[a] < 0 || n[a] >= self.dims[a]) {
-                        continue;
-                    }
-                    let k = self.index(n);
-                    for &j in &self.order[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                        f(j as usize);
-                    }
+        let (z0, z1) = ((c[2] - 1).max(0), (c[2] + 1).min(self.dims[2] - 1));
+        for x in (c[0] - 1).max(0)..=(c[0] + 1).min(self.dims[0] - 1) {
+            for y in (c[1] - 1).max(0)..=(c[1] + 1).min(self.dims[1] - 1) {
+                let first = self.starts[self.index([x, y, z0])] as usize;
+                let last = self.starts[self.index([x, y, z1]) + 1] as usize;
+                for &j in &self.order[first..last] {
+                    f(j as usize);
                 }
             }
         }
+    }
+}
+
+/// For every sphere, the spheres closer than `reach` (compressed rows: `offsets[i]..offsets[i + 1]` index
+/// `near`), in a deterministic order.
+struct Contacts {
+    offsets: Vec<u32>,
+    near: Vec<u32>,
+}
+
+impl Contacts {
+    fn find(positions: &[Vec3], grid: &Grid, reach: f32) -> Self {
+        const CHUNK: usize = 512;
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = positions
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut counts = Vec::with_capacity(chunk.len());
+                let mut near = Vec::with_capacity(chunk.len() * 8);
+                for (k, xi) in chunk.iter().enumerate() {
+                    let i = c * CHUNK + k;
+                    let before = near.len();
+                    grid.for_neighbours(*xi, |j| {
+                        if j != i && xi.distance_squared(positions[j]) < reach * reach {
+                            near.push(j as u32);
+                        }
+                    });
+                    counts.push((near.len() - before) as u32);
+                }
+                (counts, near)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(positions.len() + 1);
+        offsets.push(0);
+        let mut near = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        for (counts, list) in chunks {
+            for n in counts {
+                offsets.push(offsets.last().copied().unwrap_or(0) + n);
+            }
+            near.extend(list);
+        }
+        Self { offsets, near }
+    }
+
+    fn of(&self, i: usize) -> &[u32] {
+        &self.near[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 }
 
@@ -175,10 +218,13 @@ impl Pile {
             *x += *v * dt;
             x.y = x.y.max(rest);
         });
-        // Relax overlaps (Jacobi: every sphere reads the same snapshot, so the result is deterministic). One
-        // grid per step: a sphere moves far less than a cell between iterations.
+        // Relax overlaps (Jacobi: every sphere reads the same snapshot, so the result is deterministic). The
+        // contact candidates are gathered once per step (a sphere moves far less than a radius between
+        // iterations): every pair closer than a diameter and a margin.
         let diameter = 2.0 * p.radius;
+        let reach = diameter * 1.15;
         let grid = Grid::build(&self.positions, diameter);
+        let candidates = Contacts::find(&self.positions, &grid, reach);
         // The deepest overlap of each sphere in the last iteration: a sphere only sleeps once it is clear.
         let mut deepest = vec![0.0f32; self.positions.len()];
         let mut woken = vec![false; self.positions.len()];
@@ -193,28 +239,27 @@ impl Pile {
                     let mut push = Vec3::ZERO;
                     let mut contacts = 0.0f32;
                     let mut worst = 0.0f32;
-                    grid.for_neighbours(xi, |j| {
-                        if j == i {
-                            return;
-                        }
+                    for &j in candidates.of(i) {
+                        let j = j as usize;
                         let d = xi - snapshot[j];
                         let dist2 = d.length_squared();
-                        if dist2 < diameter * diameter {
-                            let dist = dist2.sqrt();
-                            let depth = diameter - dist;
-                            if asleep[i] && depth < wake_depth {
-                                return;
-                            }
-                            // Coincident centres separate along a direction fixed by the index order.
-                            let n = if dist > 1e-6 { d / dist } else if i < j { Vec3::X } else { Vec3::NEG_X };
-                            // A sleeping neighbour does not give way unless pressed hard: then it is
-                            // corrected too, so this sphere takes half; otherwise the whole correction.
-                            let share = if asleep[j] && depth < wake_depth { 1.0 } else { 0.5 };
-                            push += n * depth * share;
-                            contacts += 1.0;
-                            worst = worst.max(depth);
+                        if dist2 >= diameter * diameter {
+                            continue;
                         }
-                    });
+                        let dist = dist2.sqrt();
+                        let depth = diameter - dist;
+                        if asleep[i] && depth < wake_depth {
+                            continue;
+                        }
+                        // Coincident centres separate along a direction fixed by the index order.
+                        let n = if dist > 1e-6 { d / dist } else if i < j { Vec3::X } else { Vec3::NEG_X };
+                        // A sleeping neighbour does not give way unless pressed hard: then it is corrected
+                        // too, so this sphere takes half; otherwise the whole correction.
+                        let share = if asleep[j] && depth < wake_depth { 1.0 } else { 0.5 };
+                        push += n * depth * share;
+                        contacts += 1.0;
+                        worst = worst.max(depth);
+                    }
                     let mut x = xi + if contacts > 0.0 { push / contacts.powf(0.3) } else { Vec3::ZERO };
                     x.y = x.y.max(rest);
                     (x, worst)
