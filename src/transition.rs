@@ -13,7 +13,7 @@ use bevy::prelude::*;
 
 use crate::AppSystems;
 use crate::instancing::{
-    PLACEHOLDER_COUNT, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
+    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
     voxel_transform,
 };
 use crate::library::{ModelLibrary, ModelStatus};
@@ -331,10 +331,11 @@ fn start(
         match plan(*slot as usize, *now, old_count, &old, &new, &transition, &mut rng) {
             Some((tween, home)) => {
                 end = end.max(tween.end());
-                commands.entity(*entity).insert((tween, home));
+                // The flight starts where the voxel is now, repel displacement included: that is spent.
+                commands.entity(*entity).insert((tween, home, RepelOffset::default()));
             }
             None => {
-                commands.entity(*entity).remove::<VoxelTween>().insert(Visibility::Hidden);
+                commands.entity(*entity).remove::<VoxelTween>().insert((Visibility::Hidden, RepelOffset::default()));
             }
         }
     }

@@ -62,7 +62,8 @@ struct Grid {
 
 impl Grid {
     fn cell_of(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.origin) * self.inv_cell).floor();
+        // The grid's box holds every position, so truncation is flooring here.
+        let c = (p - self.origin) * self.inv_cell;
         let clamp = |v: f32, d: i32| (v as i32).clamp(0, d - 1);
         [clamp(c.x, self.dims[0]), clamp(c.y, self.dims[1]), clamp(c.z, self.dims[2])]
     }
@@ -123,7 +124,7 @@ impl Grid {
     }
 }
 
-/// For every sphere, the spheres closer than `reach` (compressed rows: `offsets[i]..offsets[i + 1]` index
+/// For every awake sphere, the spheres closer than `reach` (compressed rows: `offsets[i]..offsets[i + 1]` index
 /// `near`), in a deterministic order.
 struct Contacts {
     offsets: Vec<u32>,
@@ -131,7 +132,7 @@ struct Contacts {
 }
 
 impl Contacts {
-    fn find(positions: &[Vec3], grid: &Grid, reach: f32) -> Self {
+    fn find(positions: &[Vec3], asleep: &[bool], grid: &Grid, reach: f32) -> Self {
         const CHUNK: usize = 512;
         let chunks: Vec<(Vec<u32>, Vec<u32>)> = positions
             .par_chunks(CHUNK)
@@ -142,6 +143,10 @@ impl Contacts {
                 for (k, xi) in chunk.iter().enumerate() {
                     let i = c * CHUNK + k;
                     let before = near.len();
+                    if asleep[i] {
+                        counts.push(0);
+                        continue;
+                    }
                     grid.for_neighbours(*xi, |j| {
                         if j != i && xi.distance_squared(positions[j]) < reach * reach {
                             near.push(j as u32);
@@ -167,6 +172,16 @@ impl Contacts {
     fn of(&self, i: usize) -> &[u32] {
         &self.near[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
+}
+
+/// The sleeping spheres an awake candidate neighbour is closer to than `near` (in the order found, maybe repeated).
+fn pressed_sleepers(positions: &[Vec3], asleep: &[bool], candidates: &Contacts, near: f32) -> Vec<u32> {
+    (0..positions.len())
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            candidates.of(i).iter().copied().filter(move |&j| asleep[j as usize] && positions[i].distance_squared(positions[j as usize]) < near * near)
+        })
+        .collect()
 }
 
 /// The falling spheres.
@@ -220,16 +235,21 @@ impl Pile {
         });
         // Relax overlaps (Jacobi: every sphere reads the same snapshot, so the result is deterministic). The
         // contact candidates are gathered once per step (a sphere moves far less than a radius between
-        // iterations): every pair closer than a diameter and a margin.
+        // iterations): every pair closer than a diameter and a margin. Sleeping spheres are fixed obstacles
+        // for the whole step: they have no list of their own and an awake sphere takes the whole correction.
         let diameter = 2.0 * p.radius;
-        let reach = diameter * 1.15;
         let grid = Grid::build(&self.positions, diameter);
-        let candidates = Contacts::find(&self.positions, &grid, reach);
-        // The deepest overlap of each sphere in the last iteration: a sphere only sleeps once it is clear.
+        let candidates = Contacts::find(&self.positions, &asleep, &grid, diameter * 1.15);
+        // A sleeper still pressed deeper than this after the relaxation (the awake sphere is wedged and cannot
+        // get clear by itself) wakes up for the next step; a sphere overlapping less may fall asleep.
+        let wake_depth = 0.06 * diameter;
+        // Several contacts share one correction, damped by count^0.3 (1 contact: all of it).
+        let sharing: Vec<f32> = (0..32).map(|n| 1.0 / (n.max(1) as f32).powf(0.3)).collect();
+        // The share of a correction a sphere takes: all of it against a sleeper (which does not give way);
+        // against an awake sphere, more the higher it sits above it (up to 0.7 a diameter up, 0.3 below), so a
+        // stack pushes up from the bottom instead of sinking into itself (PBD mass scaling by height).
+        let sleeper = |j: usize| f32::from(u8::from(asleep[j]));
         let mut deepest = vec![0.0f32; self.positions.len()];
-        let mut woken = vec![false; self.positions.len()];
-        // A sleeping sphere gives way (and wakes) only when pressed deeper than this.
-        let wake_depth = 0.04 * diameter;
         for _ in 0..p.iterations {
             let snapshot = &self.positions;
             let corrected: Vec<(Vec3, f32)> = (0..snapshot.len())
@@ -237,47 +257,39 @@ impl Pile {
                 .map(|i| {
                     let xi = snapshot[i];
                     let mut push = Vec3::ZERO;
-                    let mut contacts = 0.0f32;
+                    let mut contacts = 0usize;
                     let mut worst = 0.0f32;
+                    // Branch-free over the candidates: a pair farther than a diameter adds nothing.
                     for &j in candidates.of(i) {
                         let j = j as usize;
                         let d = xi - snapshot[j];
-                        let dist2 = d.length_squared();
-                        if dist2 >= diameter * diameter {
-                            continue;
-                        }
-                        let dist = dist2.sqrt();
-                        let depth = diameter - dist;
-                        if asleep[i] && depth < wake_depth {
-                            continue;
-                        }
-                        // Coincident centres separate along a direction fixed by the index order.
-                        let n = if dist > 1e-6 { d / dist } else if i < j { Vec3::X } else { Vec3::NEG_X };
-                        // A sleeping neighbour does not give way unless pressed hard: then it is corrected
-                        // too, so this sphere takes half; otherwise the whole correction.
-                        let share = if asleep[j] && depth < wake_depth { 1.0 } else { 0.5 };
-                        push += n * depth * share;
-                        contacts += 1.0;
+                        let dist = d.length().max(1e-6);
+                        let depth = (diameter - dist).max(0.0);
+                        let share = (0.5 + 0.2 * (d.y / diameter).clamp(-1.0, 1.0)).max(sleeper(j));
+                        push += d * (depth * share / dist);
+                        contacts += usize::from(depth > 0.0);
                         worst = worst.max(depth);
+                        // Coincident centres separate along a direction fixed by the index order.
+                        if dist <= 1e-6 {
+                            push += if i < j { Vec3::X } else { Vec3::NEG_X } * depth * 0.5;
+                        }
                     }
-                    let mut x = xi + if contacts > 0.0 { push / contacts.powf(0.3) } else { Vec3::ZERO };
+                    if contacts == 0 {
+                        return (xi, 0.0);
+                    }
+                    let share = sharing.get(contacts).copied().unwrap_or_else(|| 1.0 / (contacts as f32).powf(0.3));
+                    let mut x = xi + push * share;
                     x.y = x.y.max(rest);
                     (x, worst)
                 })
                 .collect();
-            for (i, c) in corrected.iter().enumerate() {
-                woken[i] |= asleep[i] && c.0 != self.positions[i];
-            }
             self.positions = corrected.iter().map(|c| c.0).collect();
             deepest = corrected.iter().map(|c| c.1).collect();
         }
-        for (calm, woke) in self.calm.iter_mut().zip(&woken) {
-            if *woke {
-                *calm = 0;
-            }
-        }
-        let clear = 0.02 * diameter;
-        // Velocities from the corrected motion; floor bounce and friction; calm spheres fall asleep.
+        let to_wake = pressed_sleepers(&self.positions, &asleep, &candidates, diameter - wake_depth);
+        // Velocities from the corrected motion; floor bounce and friction; calm spheres fall asleep (only once
+        // they overlap less than what would wake a sleeper).
+        let clear = wake_depth;
         let sleep_steps = p.sleep_steps;
         self.velocities.par_iter_mut().zip(self.calm.par_iter_mut()).zip(self.positions.par_iter()).zip(previous.par_iter()).zip(deepest.par_iter()).for_each(|((((v, calm), x), x0), overlap)| {
             if *calm >= sleep_steps {
@@ -304,6 +316,9 @@ impl Pile {
             }
             *v = if *calm >= sleep_steps { Vec3::ZERO } else { nv };
         });
+        for j in to_wake {
+            self.calm[j as usize] = 0;
+        }
     }
 
     /// The largest speed.
