@@ -54,7 +54,8 @@ fn apply_look(
     if *last == Some(now) {
         return;
     }
-    if last.is_some() {
+    // The pool starts with rounded boxes; any other first style (`--style`) swaps at once.
+    if last.is_some() || settings.style != Style::RoundedBoxes {
         let _ = meshes.insert(&assets.mesh, style_mesh(settings.style, settings.roundness));
     }
     if let Some(mut material) = materials.get_mut(&assets.material) {

@@ -181,3 +181,29 @@ fn lego_uses_taller_cells_and_morphs_in_and_out() {
     settle(&mut app);
     assert_shows_model(&mut app);
 }
+
+/// The vertex count of the mesh every voxel shares.
+fn pool_mesh_vertices(app: &App) -> Option<usize> {
+    let assets = app.world().get_resource::<voxel_art::instancing::VoxelAssets>()?;
+    app.world().resource::<Assets<Mesh>>().get(&assets.mesh).map(Mesh::count_vertices)
+}
+
+#[test]
+fn the_pool_wears_the_style_mesh_from_the_start_and_after_a_switch() {
+    use voxel_art::style::style_mesh;
+    let vertices = |style: Style| style_mesh(style, VoxelSettings::default().roundness).count_vertices();
+    assert_ne!(vertices(Style::Lego), vertices(Style::RoundedBoxes));
+    assert_ne!(vertices(Style::Bubbles), vertices(Style::RoundedBoxes));
+    let mut app = test_app(AppArgs { style: Some("lego".into()), no_shipped: true, ..Default::default() });
+    for _ in 0..3 {
+        app.update();
+    }
+    assert_eq!(app.world().resource::<VoxelSettings>().style, Style::Lego);
+    assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::Lego)), "started with --style lego: bricks");
+    set_style(&mut app, Style::Bubbles);
+    app.update();
+    assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::Bubbles)));
+    set_style(&mut app, Style::RoundedBoxes);
+    app.update();
+    assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::RoundedBoxes)));
+}
