@@ -11,6 +11,7 @@ use crate::settings::{Style, VoxelSettings};
 use crate::transition::back_out;
 
 use super::Settled;
+use super::repel::away_from_ray;
 
 /// Timings of a burst.
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
@@ -120,11 +121,7 @@ pub(super) fn burst(
     bubbles.par_iter_mut().for_each(|(slot, home, mut bubble)| {
         let next = match bubble.state {
             BubbleState::Whole => {
-                let near = ray.0.is_some_and(|r| {
-                    let p = turn * home.position;
-                    let along = (p - r.origin).dot(*r.direction).max(0.0);
-                    p.distance(r.origin + *r.direction * along) < radius
-                });
+                let near = ray.0.is_some_and(|r| away_from_ray(turn * home.position, r).length() < radius);
                 if near { BubbleState::Bursting(0.0) } else { BubbleState::Whole }
             }
             BubbleState::Bursting(t) if t + dt >= timing.burst => {

@@ -252,7 +252,7 @@ impl Pile {
         let mut deepest = vec![0.0f32; self.positions.len()];
         for _ in 0..p.iterations {
             let snapshot = &self.positions;
-            let corrected: Vec<(Vec3, f32)> = (0..snapshot.len())
+            (self.positions, deepest) = (0..snapshot.len())
                 .into_par_iter()
                 .map(|i| {
                     let xi = snapshot[i];
@@ -282,9 +282,7 @@ impl Pile {
                     x.y = x.y.max(rest);
                     (x, worst)
                 })
-                .collect();
-            self.positions = corrected.iter().map(|c| c.0).collect();
-            deepest = corrected.iter().map(|c| c.1).collect();
+                .unzip();
         }
         let to_wake = pressed_sleepers(&self.positions, &asleep, &candidates, diameter - wake_depth);
         // Velocities from the corrected motion; floor bounce and friction; calm spheres fall asleep (only once

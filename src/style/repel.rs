@@ -12,20 +12,23 @@ use super::Settled;
 /// Spring stiffness (1/s²); the damping is critical.
 const STIFFNESS: f32 = 140.0;
 
+/// The vector from the closest point of the half-line `ray` to `p` (its length is `p`'s distance to the ray).
+pub fn away_from_ray(p: Vec3, ray: Ray3d) -> Vec3 {
+    let along = (p - ray.origin).dot(*ray.direction).max(0.0);
+    p - (ray.origin + *ray.direction * along)
+}
+
 /// The displacement a voxel at `p` should have for a cursor `ray`: away from the ray, falling off linearly
 /// to nothing at `radius`; a voxel on the ray is pushed `radius × strength`.
 pub fn repel_target(p: Vec3, ray: Option<Ray3d>, radius: f32, strength: f32) -> Vec3 {
     let Some(ray) = ray else { return Vec3::ZERO };
-    let dir = *ray.direction;
-    let along = (p - ray.origin).dot(dir);
-    let closest = ray.origin + dir * along.max(0.0);
-    let away = p - closest;
+    let away = away_from_ray(p, ray);
     let d = away.length();
     if d >= radius {
         return Vec3::ZERO;
     }
     // On the ray itself, push sideways (perpendicular to the ray, in a fixed direction).
-    let n = if d > 1e-5 { away / d } else { dir.any_orthonormal_vector() };
+    let n = if d > 1e-5 { away / d } else { ray.direction.any_orthonormal_vector() };
     n * (radius - d) * strength
 }
 
