@@ -6,7 +6,6 @@ pub mod material;
 pub mod mesh;
 
 use bevy::color::Hsla;
-use bevy::math::{Affine3A, Mat3A, Vec3A};
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
@@ -36,19 +35,6 @@ pub struct VoxelCloud;
 /// A voxel's world transform for cloud-space `position` and `scale` in a cloud turned by `rotation`.
 pub fn voxel_transform(rotation: Quat, position: Vec3, scale: Vec3) -> Transform {
     Transform { translation: rotation * position, rotation, scale }
-}
-
-/// Writes a voxel's `Transform` and its `GlobalTransform` (voxels have no parent, so the two are equal),
-/// keeping the `Transform` write out of change detection: that spares Bevy's propagation pass over every
-/// moved voxel (≈ 4 ms a frame at 100k on two cores) while the renderer picks up the changed global
-/// transform. `turn` is `local.rotation` as a matrix, computed once per frame by the caller.
-pub fn write_voxel_transform(transform: &mut Mut<Transform>, global: &mut Mut<GlobalTransform>, local: Transform, turn: Mat3A) {
-    *transform.bypass_change_detection() = local;
-    let s = local.scale;
-    **global = GlobalTransform::from(Affine3A {
-        matrix3: Mat3A::from_cols(turn.x_axis * s.x, turn.y_axis * s.y, turn.z_axis * s.z),
-        translation: Vec3A::from(local.translation),
-    });
 }
 
 /// A voxel entity and its index in the pool.

@@ -9,11 +9,11 @@ pub mod meshes;
 pub mod pile;
 pub mod repel;
 
-use bevy::math::Mat3A;
+use bevy::math::{Affine3A, Mat3A, Vec3A};
 use bevy::prelude::*;
 
 use crate::AppSystems;
-use crate::instancing::{RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelMaterial, VoxelPool, VoxelSlot, mesh::rounded_box, write_voxel_transform};
+use crate::instancing::{RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelMaterial, VoxelPool, VoxelSlot, mesh::rounded_box};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
 use bubbles::{Bubble, BubbleSettings};
@@ -106,7 +106,11 @@ fn compose(
         let translation = rotation * (home.position + wobble) + repel.offset;
         let scale = home.scale * grow;
         if transform.translation != translation || transform.scale != scale || transform.rotation != rotation {
-            write_voxel_transform(&mut transform, &mut global, Transform { translation, rotation, scale }, turn);
+            *transform.bypass_change_detection() = Transform { translation, rotation, scale };
+            *global = GlobalTransform::from(Affine3A {
+                matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
+                translation: Vec3A::from(translation),
+            });
         }
         if bubble.is_some() {
             visibility.set_if_neq(if shown { Visibility::Inherited } else { Visibility::Hidden });
