@@ -118,7 +118,8 @@ fn main() {
         let mut app = app_with(vec![sphere]);
         app.add_systems(First, circling_cursor);
         let (mean, median) = measure(&mut app, 10, 300);
-        println!("repel, cursor moving over 100k voxels: mean {mean:.2} ms/frame, median {median:.2} ms/frame");
+        let displaced = app.world_mut().query::<&voxel_art::instancing::RepelOffset>().iter(app.world()).filter(|r| !r.is_rest()).count();
+        println!("repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame");
     }
 }
 

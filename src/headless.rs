@@ -17,7 +17,7 @@ pub fn headless_app(args: AppArgs) -> App {
     let mut app = App::new();
     app.register_asset_source(FILE_SOURCE, AssetSourceBuilder::platform_default("/", None));
     app.add_plugins((
-        MinimalPlugins,
+        MinimalPlugins.set(crate::threads::task_pools()),
         TransformPlugin,
         AssetPlugin { file_path: crate::args::asset_root().display().to_string(), ..default() },
         bevy::mesh::MeshPlugin,

@@ -18,6 +18,7 @@ mod screenshot;
 pub mod settings;
 mod stage;
 pub mod style;
+pub mod threads;
 pub mod transition;
 mod ui;
 pub mod voxelize;
@@ -53,6 +54,10 @@ impl Plugin for LogicPlugin {
         app.configure_sets(Update, (AppSystems::Input, AppSystems::Simulate, AppSystems::Animate, AppSystems::Sync).chain());
         app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, transition::plugin, style::plugin, input::plugin));
     }
+
+    fn cleanup(&self, app: &mut App) {
+        threads::choose_executor(app);
+    }
 }
 
 /// The whole app on top of `DefaultPlugins`.
@@ -66,6 +71,7 @@ impl Plugin for AppPlugin {
         app.register_asset_source(FILE_SOURCE, AssetSourceBuilder::platform_default("/", None));
         app.add_plugins(
             DefaultPlugins
+                .set(threads::task_pools())
                 .set(WindowPlugin {
                     primary_window: Some(Window {
                         title: "voxel-art".into(),

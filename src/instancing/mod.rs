@@ -79,7 +79,7 @@ pub struct VoxelHome {
     pub part: u32,
 }
 
-/// Mouse-repel displacement of a voxel (world space) and its spring velocity.
+/// Mouse-repel displacement of a voxel (in the cloud's frame, like its home) and its spring velocity.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
 pub struct RepelOffset {
     /// Current displacement.

@@ -7,17 +7,20 @@ pub mod bubbles;
 pub mod falling;
 pub mod meshes;
 pub mod pile;
+pub mod place;
 pub mod repel;
 
-use bevy::math::{Affine3A, Mat3A, Vec3A};
+use bevy::ecs::change_detection::{ContiguousMut, Tick};
 use bevy::prelude::*;
 
 use crate::AppSystems;
+use crate::input::CursorRay;
 use crate::instancing::{RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelMaterial, VoxelPool, VoxelSlot, mesh::rounded_box};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
 use bubbles::{Bubble, BubbleSettings};
 use falling::Falling;
+use place::{Placement, VoxelRun};
 use repel::RepelActive;
 
 /// Voxels that styles may move: not flying in a transition, not falling.
@@ -66,58 +69,62 @@ fn apply_look(
     *last = Some(now);
 }
 
-/// Places settled voxels: home cell (turned with the model) + bubble wobble, + repel offset; bubble scale and
-/// visibility. Runs only while something moves them (and once after, to put them back); without bubbles it
-/// touches only the voxels whose repel offset changed.
+/// Places settled voxels: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
+/// visibility. The repel springs are stepped in the same pass, and nothing runs while nothing moves.
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
-fn compose(
+fn place_settled(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
     timing: Res<BubbleSettings>,
-    repel: Res<RepelActive>,
+    cursor: Res<CursorRay>,
     cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
     pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &VoxelHome, Ref<RepelOffset>, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
-    mut was_active: Local<bool>,
+    mut voxels: Query<(&VoxelSlot, &VoxelHome, &mut RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
+    mut springs: ResMut<RepelActive>,
+    mut had_bubbles: Local<bool>,
 ) {
     let bubbles = settings.style == Style::Bubbles;
-    let active = bubbles || repel.0;
-    if !active && !*was_active {
+    let ray = cursor.0.filter(|_| settings.repel);
+    if !bubbles && !*had_bubbles && ray.is_none() && !springs.0 {
         return;
     }
-    *was_active = active;
+    // One more pass after bubbles end puts the voxels back on their cells.
+    *had_bubbles = bubbles;
     let rotation = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
-    let turn = Mat3A::from_quat(rotation);
-    let t = time.elapsed_secs() * settings.speed;
-    let in_model = pool.visible;
-    voxels.par_iter_mut().for_each(|(slot, home, repel, bubble, mut transform, mut global, mut visibility)| {
-        // Without bubbles only voxels whose repel offset moved need placing.
-        if slot.0 as usize >= in_model || (bubble.is_none() && !repel.is_changed()) {
-            return;
-        }
-        let cell = home.scale.max_element();
-        let (wobble, grow, shown) = match bubble {
-            Some(b) => {
-                let (grow, shown) = b.scale(&timing);
-                (b.wobble(t, home.part, timing.wobble) * cell, grow, shown)
-            }
-            None => (Vec3::ZERO, 1.0, true),
+    let placement = Placement {
+        rotation,
+        // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
+        ray: ray.map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction }),
+        radius: settings.repel_radius,
+        strength: settings.repel_strength,
+        dt: time.delta_secs().min(1.0 / 20.0),
+        time: time.elapsed_secs() * settings.speed,
+        in_model: pool.visible,
+        bubbles: timing.clone(),
+        now: Tick::default(),
+    };
+    let mut moved = false;
+    let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
+    for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
+        let placement = Placement { now: globals.this_run_tick(), ..placement.clone() };
+        let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
+        let (transforms, _) = ContiguousMut::bypass_change_detection_split(transforms);
+        let (globals, mut global_ticks) = ContiguousMut::bypass_change_detection_split(globals);
+        let (visibilities, mut visibility_ticks) = ContiguousMut::bypass_change_detection_split(visibilities);
+        let run = VoxelRun {
+            slots,
+            homes,
+            repels,
+            bubbles,
+            transforms,
+            globals,
+            global_ticks: global_ticks.changed_mut(),
+            visibilities,
+            visibility_ticks: visibility_ticks.changed_mut(),
         };
-        let translation = rotation * (home.position + wobble) + repel.offset;
-        let scale = home.scale * grow;
-        if transform.translation != translation || transform.scale != scale || transform.rotation != rotation {
-            // As in the transition step (written out there too: a shared helper measured 2 ms slower a frame):
-            // the global transform is written directly and the Transform write skips change detection.
-            *transform.bypass_change_detection() = Transform { translation, rotation, scale };
-            *global = GlobalTransform::from(Affine3A {
-                matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
-                translation: Vec3A::from(translation),
-            });
-        }
-        if bubble.is_some() {
-            visibility.set_if_neq(if shown { Visibility::Inherited } else { Visibility::Hidden });
-        }
-    });
+        moved |= placement.place(run);
+    }
+    springs.0 = moved;
 }
 
 pub(super) fn plugin(app: &mut App) {
@@ -131,7 +138,7 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(FixedUpdate, falling::step);
     app.add_systems(
         Update,
-        (bubbles::enter_and_leave, bubbles::burst, repel::repel).chain().in_set(AppSystems::Animate).after(crate::transition::TransitionSystems),
+        (bubbles::enter_and_leave, bubbles::burst).chain().in_set(AppSystems::Animate).after(crate::transition::TransitionSystems),
     );
-    app.add_systems(Update, (compose, falling::sync, apply_look).in_set(AppSystems::Sync));
+    app.add_systems(Update, (place_settled, falling::sync, apply_look).in_set(AppSystems::Sync));
 }

@@ -1,13 +1,10 @@
 //! Mouse repel: voxels near the cursor ray are pushed away from it and spring back (critically damped) when
 //! the cursor leaves. Works in every style; not while the pointer is over the panel (no cursor ray then).
+//! The math lives here; the style composer steps every settled voxel's spring in the same pass that places it.
 
 use bevy::prelude::*;
 
-use crate::input::CursorRay;
-use crate::instancing::{RepelOffset, VoxelCloud, VoxelHome};
-use crate::settings::VoxelSettings;
-
-use super::Settled;
+use crate::instancing::RepelOffset;
 
 /// Spring stiffness (1/s²); the damping is critical.
 const STIFFNESS: f32 = 140.0;
@@ -23,54 +20,40 @@ pub fn away_from_ray(p: Vec3, ray: Ray3d) -> Vec3 {
 pub fn repel_target(p: Vec3, ray: Option<Ray3d>, radius: f32, strength: f32) -> Vec3 {
     let Some(ray) = ray else { return Vec3::ZERO };
     let away = away_from_ray(p, ray);
-    let d = away.length();
-    if d >= radius {
+    let d2 = away.length_squared();
+    if d2 >= radius * radius {
         return Vec3::ZERO;
     }
+    let d = d2.sqrt();
     // On the ray itself, push sideways (perpendicular to the ray, in a fixed direction).
     let n = if d > 1e-5 { away / d } else { ray.direction.any_orthonormal_vector() };
     n * (radius - d) * strength
 }
 
-/// Whether any voxel is displaced or moving (so the composer must run).
+impl RepelOffset {
+    /// Whether the voxel sits at its cell, still.
+    pub fn is_rest(&self) -> bool {
+        self.offset == Vec3::ZERO && self.velocity == Vec3::ZERO
+    }
+
+    /// One step of `dt` seconds of the critically damped spring towards `target`; snaps to rest once close
+    /// enough with no target, so idle voxels cost nothing.
+    pub fn stepped(&self, target: Vec3, dt: f32) -> RepelOffset {
+        let damping = 2.0 * STIFFNESS.sqrt();
+        let accel = (target - self.offset) * STIFFNESS - self.velocity * damping;
+        let velocity = self.velocity + accel * dt;
+        let offset = self.offset + velocity * dt;
+        if target == Vec3::ZERO && offset.length_squared() < 1e-6 && velocity.length_squared() < 1e-4 {
+            RepelOffset::default()
+        } else {
+            RepelOffset { offset, velocity }
+        }
+    }
+}
+
+/// Whether any voxel's repel spring was moving last frame (so the composer must run without a cursor).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct RepelActive(pub bool);
-
-/// Springs every settled voxel's offset towards its repel target.
-pub(super) fn repel(
-    time: Res<Time>,
-    settings: Res<VoxelSettings>,
-    ray: Res<CursorRay>,
-    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
-    mut voxels: Query<(&VoxelHome, &mut RepelOffset, &Visibility), Settled>,
-    mut active: ResMut<RepelActive>,
-) {
-    let ray = if settings.repel { ray.0 } else { None };
-    if ray.is_none() && !active.0 {
-        return;
-    }
-    let dt = time.delta_secs().min(1.0 / 20.0);
-    let turn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
-    let damping = 2.0 * STIFFNESS.sqrt();
-    let moving = std::sync::atomic::AtomicBool::new(false);
-    voxels.par_iter_mut().for_each(|(home, mut repel, visibility)| {
-        if *visibility == Visibility::Hidden {
-            return;
-        }
-        let target = repel_target(turn * home.position, ray, settings.repel_radius, settings.repel_strength);
-        if target == Vec3::ZERO && repel.offset == Vec3::ZERO && repel.velocity == Vec3::ZERO {
-            return;
-        }
-        let accel = (target - repel.offset) * STIFFNESS - repel.velocity * damping;
-        let velocity = repel.velocity + accel * dt;
-        let offset = repel.offset + velocity * dt;
-        // Settle exactly when close enough, so idle voxels cost nothing.
-        let done = target == Vec3::ZERO && offset.length() < 1e-3 && velocity.length() < 1e-2;
-        *repel = if done { RepelOffset::default() } else { RepelOffset { offset, velocity } };
-        moving.store(true, std::sync::atomic::Ordering::Relaxed);
-    });
-    active.0 = moving.into_inner();
-}
 
 #[cfg(test)]
 mod tests {
@@ -85,5 +68,24 @@ mod tests {
         assert!((near - Vec3::new(0.4, 0.0, 0.0)).length() < 1e-5);
         assert_eq!(repel_target(Vec3::new(2.0, 0.0, 0.0), ray, 1.0, 0.8), Vec3::ZERO);
         assert_eq!(repel_target(Vec3::ZERO, None, 1.0, 0.8), Vec3::ZERO);
+    }
+
+    #[test]
+    fn the_spring_reaches_its_target_without_overshoot_and_rests_exactly_at_home() {
+        let target = Vec3::new(0.3, 0.0, -0.4);
+        let mut spring = RepelOffset::default();
+        let mut farthest = 0.0f32;
+        for _ in 0..60 {
+            spring = spring.stepped(target, 1.0 / 60.0);
+            farthest = farthest.max(spring.offset.length());
+        }
+        assert!(spring.offset.distance(target) < 0.01, "after 1 s: {:?}", spring.offset);
+        assert!(farthest <= target.length() * 1.01, "overshot to {farthest}");
+        let mut steps = 0;
+        while !spring.is_rest() && steps < 600 {
+            spring = spring.stepped(Vec3::ZERO, 1.0 / 60.0);
+            steps += 1;
+        }
+        assert!(spring.is_rest() && steps < 60, "still moving after {steps} steps");
     }
 }

@@ -192,3 +192,19 @@ fn a_short_click_on_the_stage_shows_the_next_model_but_a_hold_or_drag_does_not()
     click(&mut app, 3, 0.0);
     assert_eq!(current(&app), 1, "clicks on the panel do not reach the stage");
 }
+
+#[test]
+fn per_voxel_systems_get_every_core_and_small_machines_run_schedules_on_one_thread() {
+    let _app = test_app(AppArgs { no_shipped: true, ..Default::default() });
+    let cores = bevy::tasks::available_parallelism();
+    // With one compute thread Bevy's `par_iter` runs sequentially; the app's pool has one per core.
+    assert!(bevy::tasks::ComputeTaskPool::get().thread_num() >= cores, "{} compute threads on {cores} cores", bevy::tasks::ComputeTaskPool::get().thread_num());
+    let mut fresh = App::new();
+    fresh.add_plugins(MinimalPlugins.set(voxel_art::threads::task_pools()));
+    let switched = voxel_art::threads::choose_executor(&mut fresh);
+    if voxel_art::threads::single_threaded(cores) {
+        assert!(switched >= 5, "only {switched} schedules switched to the single-threaded executor");
+    } else {
+        assert_eq!(switched, 0);
+    }
+}

@@ -1,0 +1,42 @@
+//! How the app uses the machine's cores. Two choices, both measured with `cargo bench --bench frame` on a
+//! 2-core machine (README, "Threads"):
+//! - the compute task pool gets every core. Bevy's default gives it only what the IO and async-compute pools
+//!   leave — one thread on 2 cores — and with one compute thread every `par_iter` runs sequentially;
+//! - on machines with at most [`SINGLE_THREADED_UP_TO`] cores the main world's schedules run on the
+//!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
+//!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
+//!   spread their work over every core.
+
+use bevy::app::{TaskPoolOptions, TaskPoolPlugin};
+use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
+use bevy::prelude::*;
+
+/// Machines with this many cores or fewer run the main schedules single-threaded.
+pub const SINGLE_THREADED_UP_TO: usize = 2;
+
+/// The task pools: the compute pool gets every core (the IO and async-compute pools keep Bevy's defaults).
+pub fn task_pools() -> TaskPoolPlugin {
+    let mut options = TaskPoolOptions::default();
+    options.compute.min_threads = bevy::tasks::available_parallelism();
+    TaskPoolPlugin { task_pool_options: options }
+}
+
+/// Whether a machine with `cores` cores runs the main schedules single-threaded.
+pub fn single_threaded(cores: usize) -> bool {
+    cores <= SINGLE_THREADED_UP_TO
+}
+
+/// Puts every schedule of the main world on the single-threaded executor when the machine is small (call
+/// once all plugins have added their schedules). Returns how many schedules were switched.
+pub fn choose_executor(app: &mut App) -> usize {
+    if !single_threaded(bevy::tasks::available_parallelism()) {
+        return 0;
+    }
+    let Some(mut schedules) = app.world_mut().get_resource_mut::<Schedules>() else { return 0 };
+    let mut switched = 0;
+    for (_, schedule) in schedules.iter_mut() {
+        schedule.set_executor(SingleThreadedExecutor::new());
+        switched += 1;
+    }
+    switched
+}
