@@ -159,7 +159,8 @@ fn pile_step() {
     let asleep = pile.calm.iter().filter(|c| **c >= pile.params.sleep_steps).count();
     println!(
         "pile step, {n} voxels, 10 s from the drop: mean {mean:.2} ms/step, worst 50 steps {worst:.2} ms/step \
-         (then {asleep} asleep, top speed {:.3})",
-        pile.max_speed()
+         (then {asleep} asleep, top speed {:.3}, deepest overlap {:.3} of a cell)",
+        pile.max_speed(),
+        pile.max_overlap(cell)
     );
 }
