@@ -47,7 +47,7 @@ impl PileParams {
             friction: 0.25,
             damping: 1.5,
             dt: 1.0 / 60.0,
-            iterations: 4,
+            iterations: 6,
             sleep_speed: cell * 2.0,
             sleep_steps: 20,
         }
