@@ -1,7 +1,7 @@
 //! Styles: rounded boxes, Lego bricks, bubbles and falling voxels (S cycles, the panel picks), and mouse
 //! repel in every style. Each style swaps the shared voxel mesh and material (the single batch stays); Lego
-//! re-voxelizes with cells 1.2× taller. Settled voxels (not tweening, not falling) are composed from their
-//! home cell, their bubble wobble and their repel offset.
+//! re-voxelizes with cells 1.2× taller. Settled voxels (not tweening, not falling) are placed (`place`) from
+//! their home cell, their bubble wobble and their repel spring.
 
 pub mod bubbles;
 pub mod falling;
@@ -10,7 +10,8 @@ pub mod pile;
 pub mod place;
 pub mod repel;
 
-use bevy::ecs::change_detection::{ContiguousMut, Tick};
+use bevy::ecs::change_detection::ContiguousMut;
+use bevy::ecs::system::SystemChangeTick;
 use bevy::prelude::*;
 
 use crate::AppSystems;
@@ -82,6 +83,7 @@ fn place_settled(
     mut voxels: Query<(&VoxelSlot, &VoxelHome, &mut RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
     mut springs: ResMut<RepelActive>,
     mut had_bubbles: Local<bool>,
+    ticks: SystemChangeTick,
 ) {
     let bubbles = settings.style == Style::Bubbles;
     let ray = cursor.0.filter(|_| settings.repel);
@@ -101,12 +103,11 @@ fn place_settled(
         time: time.elapsed_secs() * settings.speed,
         in_model: pool.visible,
         bubbles: timing.clone(),
-        now: Tick::default(),
+        now: ticks.this_run(),
     };
     let mut moved = false;
     let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
     for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
-        let placement = Placement { now: globals.this_run_tick(), ..placement.clone() };
         let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
         let (transforms, _) = ContiguousMut::bypass_change_detection_split(transforms);
         let (globals, mut global_ticks) = ContiguousMut::bypass_change_detection_split(globals);

@@ -96,9 +96,18 @@ fn falling_voxels_pile_up_at_rest_and_reassemble() {
     assert_eq!(first, again, "the same seed gives the same pile");
 }
 
+/// Voxels whose `GlobalTransform` changed in the last frame (what the renderer re-extracts).
+#[derive(Resource, Default)]
+struct Replaced(usize);
+
+fn count_replaced(voxels: Query<(), (With<VoxelSlot>, Changed<GlobalTransform>)>, mut replaced: ResMut<Replaced>) {
+    replaced.0 = voxels.iter().count();
+}
+
 #[test]
 fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     let mut app = cherry_app();
+    app.init_resource::<Replaced>().add_systems(Last, count_replaced);
     let (radius, strength) = {
         let s = app.world().resource::<VoxelSettings>();
         (s.repel_radius, s.repel_strength)
@@ -114,6 +123,7 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     for _ in 0..60 {
         app.update();
     }
+    assert!(app.world().resource::<Replaced>().0 > 0, "pushed voxels were not marked changed for the renderer");
     let pushed = translation(&mut app, 0).distance(target);
     assert!(pushed >= 0.9 * radius * strength, "pushed {pushed}, expected about {}", radius * strength);
     assert_eq!(translation(&mut app, far_slot), far_before, "a far voxel moved");
@@ -121,6 +131,7 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     for _ in 0..120 {
         app.update();
     }
+    assert_eq!(app.world().resource::<Replaced>().0, 0, "voxels at rest still rewritten every frame");
     let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
     let shown: Vec<(u32, Vec3)> = q.iter(app.world()).filter(|(_, _, v)| **v != Visibility::Hidden).map(|(s, t, _)| (s.0, t.translation)).collect();
     for (slot, at) in shown {
