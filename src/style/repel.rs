@@ -1,6 +1,6 @@
 //! Mouse repel: voxels near the cursor ray are pushed away from it and spring back (critically damped) when
 //! the cursor leaves. Works in every style; not while the pointer is over the panel (no cursor ray then).
-//! The math lives here; the style composer steps every settled voxel's spring in the same pass that places it.
+//! The math lives here; `place` steps every settled voxel's spring in the same pass that places it.
 
 use bevy::prelude::*;
 
@@ -51,7 +51,7 @@ impl RepelOffset {
     }
 }
 
-/// Whether any voxel's repel spring was moving last frame (so the composer must run without a cursor).
+/// Whether any voxel's repel spring was moving last frame (so placing must go on without a cursor).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct RepelActive(pub bool);
 
