@@ -105,7 +105,7 @@ fn place_settled(
         bubbles: timing.clone(),
         now: ticks.this_run(),
     };
-    let mut moved = false;
+    let mut displaced = false;
     let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
     for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
         let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
@@ -123,9 +123,9 @@ fn place_settled(
             visibilities,
             visibility_ticks: visibility_ticks.changed_mut(),
         };
-        moved |= placement.place(run);
+        displaced |= placement.place(run);
     }
-    springs.0 = moved;
+    springs.0 = displaced;
 }
 
 pub(super) fn plugin(app: &mut App) {

@@ -104,20 +104,20 @@ impl<'a> VoxelRun<'a> {
 
 impl Placement {
     /// Places every voxel of `run` that moves (all of them with bubbles; otherwise those the cursor reaches
-    /// or whose spring still moves), over all cores. Returns whether any repel spring moved.
+    /// or whose spring still moves), over all cores. Returns whether any voxel is still off its cell.
     pub fn place(&self, run: VoxelRun) -> bool {
         if run.len() <= PIECE {
             return self.place_piece(run);
         }
         let half = run.len() / 2;
         let (a, b) = run.split_at(half);
-        let (moved_a, moved_b) = rayon::join(|| self.place(a), || self.place(b));
-        moved_a || moved_b
+        let (displaced_a, displaced_b) = rayon::join(|| self.place(a), || self.place(b));
+        displaced_a || displaced_b
     }
 
     fn place_piece(&self, run: VoxelRun) -> bool {
         let turn = Mat3A::from_quat(self.rotation);
-        let mut moved = false;
+        let mut displaced = false;
         for i in 0..run.len() {
             if run.slots[i].0 as usize >= self.in_model {
                 continue;
@@ -131,8 +131,13 @@ impl Placement {
                 continue;
             }
             if !still {
-                *repel = repel.stepped(target, self.dt);
-                moved = true;
+                let next = repel.stepped(target, self.dt);
+                displaced |= !next.is_rest();
+                // Held at its target by a still cursor: nothing changes, nothing to write.
+                if next == *repel && bubble.is_none() {
+                    continue;
+                }
+                *repel = next;
             }
             let (wobble, grow, shown) = match bubble {
                 Some(b) => {
@@ -159,7 +164,7 @@ impl Placement {
                 }
             }
         }
-        moved
+        displaced
     }
 }
 
@@ -243,6 +248,20 @@ mod tests {
         assert!(voxels.transforms[3].translation.distance(expected) < 1e-5);
         assert!(voxels.globals[3].translation().distance(expected) < 1e-5);
         assert_eq!(voxels.transforms[3].rotation, p.rotation);
+    }
+
+    #[test]
+    fn voxels_held_off_by_a_still_cursor_stop_being_rewritten() {
+        let mut voxels = Voxels::row(6, None);
+        let p = placement(2.0, 5);
+        for _ in 0..120 {
+            p.place(voxels.run());
+        }
+        let held = voxels.repels[3];
+        assert!(held.velocity == Vec3::ZERO && held.offset.length() > 0.1, "{held:?}");
+        let later = Placement { now: Tick::new(9), ..p };
+        assert!(later.place(voxels.run()), "held voxels are still off their cells");
+        assert!(voxels.global_ticks.iter().all(|t| *t != Tick::new(9)), "held voxels rewritten");
     }
 
     #[test]

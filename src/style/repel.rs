@@ -36,22 +36,23 @@ impl RepelOffset {
         self.offset == Vec3::ZERO && self.velocity == Vec3::ZERO
     }
 
-    /// One step of `dt` seconds of the critically damped spring towards `target`; snaps to rest once close
-    /// enough with no target, so idle voxels cost nothing.
+    /// One step of `dt` seconds of the critically damped spring towards `target`; snaps onto the target (at
+    /// rest, with no target) once within a millimetre and a centimetre per second, so voxels held off by a
+    /// still cursor, or back home, cost nothing more.
     pub fn stepped(&self, target: Vec3, dt: f32) -> RepelOffset {
         let damping = 2.0 * STIFFNESS.sqrt();
         let accel = (target - self.offset) * STIFFNESS - self.velocity * damping;
         let velocity = self.velocity + accel * dt;
         let offset = self.offset + velocity * dt;
-        if target == Vec3::ZERO && offset.length_squared() < 1e-6 && velocity.length_squared() < 1e-4 {
-            RepelOffset::default()
+        if offset.distance_squared(target) < 1e-6 && velocity.length_squared() < 1e-4 {
+            RepelOffset { offset: target, velocity: Vec3::ZERO }
         } else {
             RepelOffset { offset, velocity }
         }
     }
 }
 
-/// Whether any voxel's repel spring was moving last frame (so placing must go on without a cursor).
+/// Whether any voxel was off its cell last frame (so placing must go on without a cursor, to bring it home).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct RepelActive(pub bool);
 
