@@ -5,6 +5,9 @@ use std::path::{Path, PathBuf};
 use bevy::prelude::Resource;
 use clap::Parser;
 
+use crate::settings::Style;
+use crate::transition::Assignment;
+
 /// Parsed command line of the app.
 #[derive(Parser, Resource, Clone, Debug, Default)]
 #[command(name = "voxel-art", version, about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help")]
@@ -27,12 +30,12 @@ pub struct AppArgs {
     /// --frames from the switch (a frame of the morph).
     #[arg(long)]
     pub then: Option<usize>,
-    /// Start in this style: boxes, lego, bubbles or falling (S cycles them).
-    #[arg(long, value_parser = ["boxes", "lego", "bubbles", "falling"])]
-    pub style: Option<String>,
-    /// How voxels are matched to the next model's cells: height, morton or grid (also in the panel).
-    #[arg(long = "match", value_parser = ["height", "morton", "grid"])]
-    pub assignment: Option<String>,
+    /// Start in this style (S cycles them).
+    #[arg(long, value_enum)]
+    pub style: Option<Style>,
+    /// How voxels are matched to the next model's cells (also in the panel).
+    #[arg(long = "match", value_enum)]
+    pub assignment: Option<Assignment>,
 }
 
 impl AppArgs {

@@ -4,10 +4,11 @@ use bevy::prelude::*;
 use voxel_core::{FillMode, GridSize, VoxelizeOptions};
 
 /// How voxels look and move.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect, clap::ValueEnum)]
 pub enum Style {
     /// Rounded boxes (the article's look).
     #[default]
+    #[value(name = "boxes")]
     RoundedBoxes,
     /// Lego bricks: studs on top, cells 1.2× taller than wide, shiny plastic.
     Lego,
@@ -114,12 +115,9 @@ impl VoxelSettings {
 
 /// Applies `--style` from the command line.
 fn style_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<VoxelSettings>) {
-    settings.style = match args.as_ref().and_then(|a| a.style.as_deref()) {
-        Some("lego") => Style::Lego,
-        Some("bubbles") => Style::Bubbles,
-        Some("falling") => Style::Falling,
-        _ => Style::RoundedBoxes,
-    };
+    if let Some(style) = args.and_then(|a| a.style) {
+        settings.style = style;
+    }
 }
 
 pub(super) fn plugin(app: &mut App) {

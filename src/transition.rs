@@ -68,7 +68,7 @@ impl Default for TransitionSettings {
 }
 
 /// How the voxels of the pool are matched to the cells of the next model.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect, clap::ValueEnum)]
 pub enum Assignment {
     /// Both sorted along a Z-order (Morton) curve: nearby voxels stay together (the most coherent by eye:
     /// see docs/morph-assignment.png).
@@ -422,11 +422,9 @@ fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Lo
 
 /// Applies `--match` from the command line.
 fn assignment_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<TransitionSettings>) {
-    settings.assignment = match args.as_ref().and_then(|a| a.assignment.as_deref()) {
-        Some("height") => Assignment::Height,
-        Some("grid") => Assignment::Grid,
-        _ => Assignment::Morton,
-    };
+    if let Some(assignment) = args.and_then(|a| a.assignment) {
+        settings.assignment = assignment;
+    }
 }
 
 pub(super) fn plugin(app: &mut App) {

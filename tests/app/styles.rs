@@ -207,7 +207,7 @@ fn the_pool_wears_the_style_mesh_from_the_start_and_after_a_switch() {
     let vertices = |style: Style| style_mesh(style, VoxelSettings::default().roundness).count_vertices();
     assert_ne!(vertices(Style::Lego), vertices(Style::RoundedBoxes));
     assert_ne!(vertices(Style::Bubbles), vertices(Style::RoundedBoxes));
-    let mut app = test_app(AppArgs { style: Some("lego".into()), no_shipped: true, ..Default::default() });
+    let mut app = test_app(AppArgs { style: Some(Style::Lego), no_shipped: true, ..Default::default() });
     for _ in 0..3 {
         app.update();
     }
