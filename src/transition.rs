@@ -7,14 +7,14 @@
 use std::f32::consts::PI;
 
 use bevy::ecs::system::ParallelCommands;
-use bevy::math::{Affine3A, Mat3A, Vec3A};
+use bevy::math::Mat3A;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
 use crate::AppSystems;
 use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
-    voxel_transform,
+    voxel_global, voxel_transform,
 };
 use crate::library::{ModelLibrary, ModelStatus};
 use crate::rng::Rng;
@@ -384,11 +384,7 @@ fn step(
         // voxels (4 ms a frame on two cores). The renderer picks up the changed GlobalTransform.
         let local = voxel_transform(rotation, position, scale);
         *transform.bypass_change_detection() = local;
-        // The same affine as `GlobalTransform::from(local)`, with the shared rotation matrix computed once.
-        *global = GlobalTransform::from(Affine3A {
-            matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
-            translation: Vec3A::from(local.translation),
-        });
+        *global = voxel_global(turn, scale, local.translation);
         // The colour only moves inside its short window (and lands exactly at its end).
         if tween.elapsed >= tween.color_delay {
             let color = pack_color(tween.color());

@@ -6,6 +6,7 @@ pub mod material;
 pub mod mesh;
 
 use bevy::color::Hsla;
+use bevy::math::{Affine3A, Mat3A};
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
@@ -35,6 +36,17 @@ pub struct VoxelCloud;
 /// A voxel's world transform for cloud-space `position` and `scale` in a cloud turned by `rotation`.
 pub fn voxel_transform(rotation: Quat, position: Vec3, scale: Vec3) -> Transform {
     Transform { translation: rotation * position, rotation, scale }
+}
+
+/// The global transform of a voxel at world `translation` with box `scale`, in a cloud turned by `turn` (the
+/// same affine as `GlobalTransform::from(voxel_transform(..))`, with the cloud's rotation matrix computed once
+/// per frame by the caller). Voxels have no parent, so the systems that move them write this directly.
+#[inline]
+pub fn voxel_global(turn: Mat3A, scale: Vec3, translation: Vec3) -> GlobalTransform {
+    GlobalTransform::from(Affine3A {
+        matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
+        translation: translation.into(),
+    })
 }
 
 /// A voxel entity and its index in the pool.

@@ -6,10 +6,10 @@
 //! the cursor leaves alone costs one distance test.
 
 use bevy::ecs::change_detection::Tick;
-use bevy::math::{Affine3A, Mat3A, Vec3A};
+use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 
-use crate::instancing::{RepelOffset, VoxelHome, VoxelSlot};
+use crate::instancing::{RepelOffset, VoxelHome, VoxelSlot, voxel_global};
 
 use super::bubbles::{Bubble, BubbleSettings};
 use super::repel::repel_target;
@@ -151,10 +151,7 @@ impl Placement {
             // As in the transition step: the global transform is written directly (the renderer reads it; its
             // tick tells extraction it changed) and the Transform is kept in step without change detection.
             run.transforms[i] = Transform { translation, rotation: self.rotation, scale };
-            run.globals[i] = GlobalTransform::from(Affine3A {
-                matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
-                translation: translation.into(),
-            });
+            run.globals[i] = voxel_global(turn, scale, translation);
             run.global_ticks[i] = self.now;
             if bubble.is_some() {
                 let visibility = if shown { Visibility::Inherited } else { Visibility::Hidden };
