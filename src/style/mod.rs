@@ -10,18 +10,14 @@ pub mod pile;
 pub mod place;
 pub mod repel;
 
-use bevy::ecs::change_detection::ContiguousMut;
-use bevy::ecs::system::SystemChangeTick;
 use bevy::prelude::*;
 
 use crate::AppSystems;
-use crate::input::CursorRay;
-use crate::instancing::{RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelMaterial, VoxelPool, VoxelSlot, mesh::rounded_box};
+use crate::instancing::{VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
-use bubbles::{Bubble, BubbleSettings};
+use bubbles::BubbleSettings;
 use falling::Falling;
-use place::{Placement, VoxelRun};
 use repel::RepelActive;
 
 /// Voxels that styles may move: not flying in a transition, not falling.
@@ -70,64 +66,6 @@ fn apply_look(
     *last = Some(now);
 }
 
-/// Places settled voxels: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
-/// visibility. The repel springs are stepped in the same pass, and nothing runs while nothing moves.
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
-fn place_settled(
-    time: Res<Time>,
-    settings: Res<VoxelSettings>,
-    timing: Res<BubbleSettings>,
-    cursor: Res<CursorRay>,
-    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &VoxelHome, &mut RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
-    mut springs: ResMut<RepelActive>,
-    mut had_bubbles: Local<bool>,
-    ticks: SystemChangeTick,
-) {
-    let bubbles = settings.style == Style::Bubbles;
-    let ray = cursor.0.filter(|_| settings.repel);
-    if !bubbles && !*had_bubbles && ray.is_none() && !springs.0 {
-        return;
-    }
-    // One more pass after bubbles end puts the voxels back on their cells.
-    *had_bubbles = bubbles;
-    let rotation = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
-    let placement = Placement {
-        rotation,
-        // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
-        ray: ray.map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction }),
-        radius: settings.repel_radius,
-        strength: settings.repel_strength,
-        dt: time.delta_secs().min(1.0 / 20.0),
-        time: time.elapsed_secs() * settings.speed,
-        in_model: pool.visible,
-        bubbles: timing.clone(),
-        now: ticks.this_run(),
-    };
-    let mut displaced = false;
-    let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
-    for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
-        let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
-        let (transforms, _) = ContiguousMut::bypass_change_detection_split(transforms);
-        let (globals, mut global_ticks) = ContiguousMut::bypass_change_detection_split(globals);
-        let (visibilities, mut visibility_ticks) = ContiguousMut::bypass_change_detection_split(visibilities);
-        let run = VoxelRun {
-            slots,
-            homes,
-            repels,
-            bubbles,
-            transforms,
-            globals,
-            global_ticks: global_ticks.changed_mut(),
-            visibilities,
-            visibility_ticks: visibility_ticks.changed_mut(),
-        };
-        displaced |= placement.place(run);
-    }
-    springs.0 = displaced;
-}
-
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<BubbleSettings>();
     app.init_resource::<RepelActive>();
@@ -141,5 +79,5 @@ pub(super) fn plugin(app: &mut App) {
         Update,
         (bubbles::enter_and_leave, bubbles::burst).chain().in_set(AppSystems::Animate).after(crate::transition::TransitionSystems),
     );
-    app.add_systems(Update, (place_settled, falling::sync, apply_look).in_set(AppSystems::Sync));
+    app.add_systems(Update, (place::place_settled, falling::sync, apply_look).in_set(AppSystems::Sync));
 }

@@ -5,14 +5,18 @@
 //! wrapped (3.4 ms against 1.2 ms for the same loop over plain slices, README "Repel"), and every voxel
 //! the cursor leaves alone costs one distance test.
 
-use bevy::ecs::change_detection::Tick;
+use bevy::ecs::change_detection::{ContiguousMut, Tick};
+use bevy::ecs::system::SystemChangeTick;
 use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 
-use crate::instancing::{RepelOffset, VoxelHome, VoxelSlot, voxel_global};
+use crate::input::CursorRay;
+use crate::instancing::{RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, voxel_global};
+use crate::settings::{Style, VoxelSettings};
 
+use super::Settled;
 use super::bubbles::{Bubble, BubbleSettings};
-use super::repel::repel_target;
+use super::repel::{RepelActive, repel_target};
 
 /// Voxels one task places (smaller runs are not split further).
 const PIECE: usize = 4096;
@@ -163,6 +167,64 @@ impl Placement {
         }
         displaced
     }
+}
+
+/// Places settled voxels: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
+/// visibility. The repel springs are stepped in the same pass, and nothing runs while nothing moves.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+pub(super) fn place_settled(
+    time: Res<Time>,
+    settings: Res<VoxelSettings>,
+    timing: Res<BubbleSettings>,
+    cursor: Res<CursorRay>,
+    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
+    pool: Res<VoxelPool>,
+    mut voxels: Query<(&VoxelSlot, &VoxelHome, &mut RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
+    mut springs: ResMut<RepelActive>,
+    mut had_bubbles: Local<bool>,
+    ticks: SystemChangeTick,
+) {
+    let bubbles = settings.style == Style::Bubbles;
+    let ray = cursor.0.filter(|_| settings.repel);
+    if !bubbles && !*had_bubbles && ray.is_none() && !springs.0 {
+        return;
+    }
+    // One more pass after bubbles end puts the voxels back on their cells.
+    *had_bubbles = bubbles;
+    let rotation = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
+    let placement = Placement {
+        rotation,
+        // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
+        ray: ray.map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction }),
+        radius: settings.repel_radius,
+        strength: settings.repel_strength,
+        dt: time.delta_secs().min(1.0 / 20.0),
+        time: time.elapsed_secs() * settings.speed,
+        in_model: pool.visible,
+        bubbles: timing.clone(),
+        now: ticks.this_run(),
+    };
+    let mut displaced = false;
+    let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
+    for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
+        let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
+        let (transforms, _) = ContiguousMut::bypass_change_detection_split(transforms);
+        let (globals, mut global_ticks) = ContiguousMut::bypass_change_detection_split(globals);
+        let (visibilities, mut visibility_ticks) = ContiguousMut::bypass_change_detection_split(visibilities);
+        let run = VoxelRun {
+            slots,
+            homes,
+            repels,
+            bubbles,
+            transforms,
+            globals,
+            global_ticks: global_ticks.changed_mut(),
+            visibilities,
+            visibility_ticks: visibility_ticks.changed_mut(),
+        };
+        displaced |= placement.place(run);
+    }
+    springs.0 = displaced;
 }
 
 #[cfg(test)]
