@@ -77,6 +77,19 @@ impl Grid {
         self.cells = cells;
     }
 
+    /// Fills `sorted` with `by_sphere`'s values in cell order.
+    pub(super) fn gather<T: Copy, U: From<T>>(&self, by_sphere: &[T], sorted: &mut Vec<U>) {
+        sorted.clear();
+        sorted.extend(self.order.iter().map(|&i| U::from(by_sphere[i as usize])));
+    }
+
+    /// Writes cell-ordered `sorted` values back by sphere.
+    pub(super) fn scatter<T: Copy, U: From<T>>(&self, sorted: &[T], by_sphere: &mut [U]) {
+        for (value, &i) in sorted.iter().zip(&self.order) {
+            by_sphere[i as usize] = U::from(*value);
+        }
+    }
+
     /// Calls `f` with the sorted-index runs covering the 27 cells around `p` (one run per (x, y) row).
     pub(super) fn for_neighbour_runs(&self, p: Vec3, mut f: impl FnMut(Range<usize>)) {
         let c = self.cell_of(p);
@@ -168,7 +181,8 @@ mod tests {
         let reach = 0.26 * 1.15;
         let mut grid = Grid::default();
         grid.rebuild(&positions, reach);
-        let sorted: Vec<Vec3A> = grid.order.iter().map(|&i| Vec3A::from(positions[i as usize])).collect();
+        let mut sorted: Vec<Vec3A> = Vec::new();
+        grid.gather(&positions, &mut sorted);
         let asleep: Vec<bool> = (0..sorted.len()).map(|k| k % 7 == 0).collect();
         let mut contacts = Contacts::default();
         contacts.find(&sorted, &asleep, &grid, reach);

@@ -134,19 +134,15 @@ impl Pile {
         let diameter = 2.0 * self.params.radius;
         let reach = diameter * REACH;
         s.grid.rebuild(&self.positions, reach);
-        s.sorted.clear();
-        s.sorted.extend(s.grid.order.iter().map(|&i| Vec3A::from(self.positions[i as usize])));
-        s.sorted_asleep.clear();
-        s.sorted_asleep.extend(s.grid.order.iter().map(|&i| s.asleep[i as usize]));
+        s.grid.gather(&self.positions, &mut s.sorted);
+        s.grid.gather(&s.asleep, &mut s.sorted_asleep);
         s.contacts.find(&s.sorted, &s.sorted_asleep, &s.grid, reach);
         for _ in 0..self.params.iterations {
             s.relax(&self.params);
         }
+        s.grid.scatter(&s.sorted, &mut self.positions);
         s.overlap.resize(self.positions.len(), 0.0);
-        for (k, &i) in s.grid.order.iter().enumerate() {
-            self.positions[i as usize] = s.sorted[k].into();
-            s.overlap[i as usize] = s.deepest[k];
-        }
+        s.grid.scatter(&s.deepest, &mut s.overlap);
         // A sleeper still pressed deeper than this after the relaxation (the awake sphere is wedged and cannot
         // get clear by itself) wakes up for the next step; a sphere overlapping less may fall asleep.
         let wake_depth = 0.06 * diameter;
@@ -243,7 +239,8 @@ impl Pile {
     pub fn max_overlap(&self, size: f32) -> f32 {
         let mut grid = Grid::default();
         grid.rebuild(&self.positions, 2.0 * self.params.radius.max(size * 0.5));
-        let sorted: Vec<Vec3> = grid.order.iter().map(|&i| self.positions[i as usize]).collect();
+        let mut sorted: Vec<Vec3> = Vec::new();
+        grid.gather(&self.positions, &mut sorted);
         (0..sorted.len())
             .into_par_iter()
             .map(|k| {
@@ -311,8 +308,7 @@ impl Scratch {
     /// stop sliding and heap up instead of flowing flat.
     fn rub(&mut self, velocities: &mut [Vec3], p: &PileParams) {
         let touch = 2.0 * p.radius * 1.02;
-        self.sorted_velocities.clear();
-        self.sorted_velocities.extend(self.grid.order.iter().map(|&i| Vec3A::from(velocities[i as usize])));
+        self.grid.gather(velocities, &mut self.sorted_velocities);
         self.rubbed.resize(self.sorted.len(), Vec3A::ZERO);
         let (positions, asleep, contacts, before) = (&self.sorted, &self.sorted_asleep, &self.contacts, &self.sorted_velocities);
         self.rubbed.par_iter_mut().enumerate().for_each(|(k, out)| {
@@ -332,9 +328,7 @@ impl Scratch {
                 *out += (sum / count as f32 - before[k]) * p.contact_friction;
             }
         });
-        for (k, &i) in self.grid.order.iter().enumerate() {
-            velocities[i as usize] = self.rubbed[k].into();
-        }
+        self.grid.scatter(&self.rubbed, velocities);
     }
 
     /// The sleepers (sphere indices) an awake candidate neighbour is closer to than `near` after the
