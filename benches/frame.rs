@@ -92,8 +92,11 @@ fn main() {
     if wanted("pile") {
         pile_step();
     }
-    let (sphere, cube) = (big_model(), cube_model());
-    println!("voxels: sphere {}, cube {}; threads: {}", sphere.voxels.len(), cube.voxels.len(), bevy::tasks::available_parallelism());
+    if !["static", "recolour", "morph", "repel"].into_iter().any(wanted) {
+        return;
+    }
+    let sphere = big_model();
+    println!("voxels: sphere {}; threads: {}", sphere.voxels.len(), bevy::tasks::available_parallelism());
     if wanted("static") {
         let mut app = app_with(vec![sphere.clone()]);
         let (mean, median) = measure(&mut app, 30, 300);
@@ -107,6 +110,8 @@ fn main() {
     }
     if wanted("morph") {
         // Mid-morph: frames 12..60 after a switch, when every voxel's delay (≤ 0.2 s) has passed.
+        let cube = cube_model();
+        println!("voxels: cube {}", cube.voxels.len());
         let mut app = app_with(vec![sphere.clone(), cube]);
         app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
         let tweening = |app: &mut App| app.world_mut().query::<&voxel_art::transition::VoxelTween>().iter(app.world()).count();
