@@ -17,13 +17,15 @@ use voxel_art::voxelize::VoxelModel;
 /// About 100k voxels: a solid sphere 58 cells across.
 fn big_model() -> voxel_art::voxel::VoxelModel {
     let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 48), [0.9, 0.5, 0.6, 1.0]);
-    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(58), hollow: false, ..Default::default() }).expect("voxelize")
+    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(58), hollow: false, ..Default::default() })
+        .expect("voxelize")
 }
 
 /// About 100k voxels of another shape: a solid cube 46 cells wide.
 fn cube_model() -> voxel_art::voxel::VoxelModel {
     let soup = TriangleSoup::from_mesh(&voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
-    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(46), hollow: false, ..Default::default() }).expect("voxelize")
+    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(46), hollow: false, ..Default::default() })
+        .expect("voxelize")
 }
 
 fn entry(name: &str, handle: Handle<VoxelModel>) -> ModelEntry {
@@ -44,9 +46,11 @@ fn settled(app: &App) -> bool {
 }
 
 fn app_with(models: Vec<voxel_art::voxel::VoxelModel>) -> App {
-    let mut app = voxel_art::headless::headless_app(voxel_art::args::AppArgs { no_shipped: true, ..Default::default() });
+    let mut app =
+        voxel_art::headless::headless_app(voxel_art::args::AppArgs { no_shipped: true, ..Default::default() });
     app.update();
-    let handles: Vec<_> = models.into_iter().map(|m| app.world_mut().resource_mut::<Assets<VoxelModel>>().add(VoxelModel(m))).collect();
+    let handles: Vec<_> =
+        models.into_iter().map(|m| app.world_mut().resource_mut::<Assets<VoxelModel>>().add(VoxelModel(m))).collect();
     let mut library = app.world_mut().resource_mut::<ModelLibrary>();
     library.entries = handles.into_iter().enumerate().map(|(i, h)| entry(&format!("model {i}"), h)).collect();
     library.current = 0;
@@ -63,7 +67,9 @@ fn app_with(models: Vec<voxel_art::voxel::VoxelModel>) -> App {
 /// Changes every voxel's colour (as a colour animation would).
 fn recolor_everything(time: Res<Time>, mut voxels: Query<(&VoxelSlot, &mut MeshTag)>) {
     let shift = (time.elapsed_secs() * 60.0) as u32;
-    voxels.par_iter_mut().for_each(|(slot, mut tag)| tag.0 = slot.0.wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000);
+    voxels
+        .par_iter_mut()
+        .for_each(|(slot, mut tag)| tag.0 = slot.0.wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000);
 }
 
 fn measure(app: &mut App, warmup: usize, frames: usize) -> (f64, f64) {
@@ -114,17 +120,28 @@ fn main() {
         println!("voxels: cube {}", cube.voxels.len());
         let mut app = app_with(vec![sphere.clone(), cube]);
         app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
-        let tweening = |app: &mut App| app.world_mut().query::<&voxel_art::transition::VoxelTween>().iter(app.world()).count();
+        let tweening =
+            |app: &mut App| app.world_mut().query::<&voxel_art::transition::VoxelTween>().iter(app.world()).count();
         let (mean, median) = measure(&mut app, 12, 48);
-        println!("mid-morph ({} tweening at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame", tweening(&mut app));
+        println!(
+            "mid-morph ({} tweening at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame",
+            tweening(&mut app)
+        );
     }
     if wanted("repel") {
         // Mouse repel: the cursor ray circling through a settled 100k-voxel model (one turn in 2 s).
         let mut app = app_with(vec![sphere]);
         app.add_systems(First, circling_cursor);
         let (mean, median) = measure(&mut app, 10, 300);
-        let displaced = app.world_mut().query::<&voxel_art::instancing::RepelOffset>().iter(app.world()).filter(|r| !r.is_rest()).count();
-        println!("repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame");
+        let displaced = app
+            .world_mut()
+            .query::<&voxel_art::instancing::RepelOffset>()
+            .iter(app.world())
+            .filter(|r| !r.is_rest())
+            .count();
+        println!(
+            "repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame"
+        );
     }
 }
 

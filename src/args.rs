@@ -10,7 +10,11 @@ use crate::transition::Assignment;
 
 /// Parsed command line of the app.
 #[derive(Parser, Resource, Clone, Debug, Default)]
-#[command(name = "voxel-art", version, about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help")]
+#[command(
+    name = "voxel-art",
+    version,
+    about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help"
+)]
 pub struct AppArgs {
     /// Extra models (.glb/.gltf) or folders of models to add to the shipped ones.
     pub models: Vec<PathBuf>,

@@ -39,7 +39,12 @@ pub struct CursorRay(pub Option<Ray3d>);
 #[derive(Message, Debug, Clone, Copy, PartialEq)]
 pub struct StageClick(pub Vec2);
 
-fn keys(keys: Res<ButtonInput<KeyCode>>, mut requests: MessageWriter<LibraryRequest>, mut settings: ResMut<VoxelSettings>, mut exit: MessageWriter<AppExit>) {
+fn keys(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut requests: MessageWriter<LibraryRequest>,
+    mut settings: ResMut<VoxelSettings>,
+    mut exit: MessageWriter<AppExit>,
+) {
     if keys.just_pressed(KeyCode::ArrowRight) || keys.just_pressed(KeyCode::Space) {
         requests.write(LibraryRequest::Next);
     }

@@ -51,8 +51,19 @@ pub struct LogicPlugin;
 
 impl Plugin for LogicPlugin {
     fn build(&self, app: &mut App) {
-        app.configure_sets(Update, (AppSystems::Input, AppSystems::Simulate, AppSystems::Animate, AppSystems::Sync).chain());
-        app.add_plugins((settings::plugin, library::plugin, voxelize::plugin, instancing::plugin, transition::plugin, style::plugin, input::plugin));
+        app.configure_sets(
+            Update,
+            (AppSystems::Input, AppSystems::Simulate, AppSystems::Animate, AppSystems::Sync).chain(),
+        );
+        app.add_plugins((
+            settings::plugin,
+            library::plugin,
+            voxelize::plugin,
+            instancing::plugin,
+            transition::plugin,
+            style::plugin,
+            input::plugin,
+        ));
     }
 
     fn cleanup(&self, app: &mut App) {
@@ -87,7 +98,9 @@ impl Plugin for AppPlugin {
         if self.args.screenshot.is_some() {
             // Screenshots step time by exactly 1/60 s a frame, so frame N is the same moment of an animation
             // however slowly a software renderer draws.
-            app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(std::time::Duration::from_secs_f64(1.0 / 60.0)));
+            app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(std::time::Duration::from_secs_f64(
+                1.0 / 60.0,
+            )));
         }
         // Render-side registration first (the voxel material's asset type comes from its MaterialPlugin).
         app.add_plugins((

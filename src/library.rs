@@ -111,10 +111,12 @@ impl ModelLibrary {
     /// Adds a file or every model in a folder; returns the index of the first added. A path that is
     /// neither becomes a failed entry, so the panel shows why.
     pub fn add_path(&mut self, asset_server: &AssetServer, path: &Path) -> Option<usize> {
-        let files = if path.is_dir() { voxel_core::cli::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
+        let files =
+            if path.is_dir() { voxel_core::cli::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
         let mut first = None;
         for file in files {
-            let name = file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
+            let name =
+                file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
             let index = if !file.is_file() {
                 self.fail_entry(name, file_asset_path(&file), format!("cannot read {}: no such file", file.display()))
             } else if !voxel_core::cli::is_model_file(&file) {
@@ -158,7 +160,11 @@ impl ModelLibrary {
 }
 
 /// Adds the shipped models (`assets/models`) and the command-line ones.
-fn populate(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>, args: Option<Res<crate::args::AppArgs>>) {
+fn populate(
+    mut library: ResMut<ModelLibrary>,
+    asset_server: Res<AssetServer>,
+    args: Option<Res<crate::args::AppArgs>>,
+) {
     let shipped = crate::args::asset_root().join("models");
     let skip = args.as_ref().is_some_and(|a| a.no_shipped);
     for file in voxel_core::cli::expand_inputs(&[shipped]).into_iter().filter(|_| !skip) {
@@ -175,7 +181,11 @@ fn populate(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>, a
     }
 }
 
-fn handle_requests(mut requests: MessageReader<LibraryRequest>, mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>) {
+fn handle_requests(
+    mut requests: MessageReader<LibraryRequest>,
+    mut library: ResMut<ModelLibrary>,
+    asset_server: Res<AssetServer>,
+) {
     for request in requests.read() {
         let n = library.entries.len();
         match request {
@@ -223,5 +233,8 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<LibraryRequest>();
     app.add_message::<FileDragAndDrop>();
     app.add_systems(Startup, populate);
-    app.add_systems(Update, (dropped_files, handle_requests, watch_loading).chain().in_set(AppSystems::Simulate).in_set(LibrarySystems));
+    app.add_systems(
+        Update,
+        (dropped_files, handle_requests, watch_loading).chain().in_set(AppSystems::Simulate).in_set(LibrarySystems),
+    );
 }

@@ -72,7 +72,11 @@ fn spawn_previews(
             Name::new(format!("preview camera {i}")),
             PreviewCamera(i),
             Camera3d::default(),
-            Camera { order: 10 + i as isize, clear_color: ClearColorConfig::Custom(Color::from(Hsla::new(hue, 0.5, 0.7, 1.0))), ..default() },
+            Camera {
+                order: 10 + i as isize,
+                clear_color: ClearColorConfig::Custom(Color::from(Hsla::new(hue, 0.5, 0.7, 1.0))),
+                ..default()
+            },
             Transform::from_xyz(0.0, 0.9, 3.4).looking_at(Vec3::ZERO, Vec3::Y),
             layer.clone(),
         ));
@@ -81,8 +85,17 @@ fn spawn_previews(
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let scale = 2.4 / (hi - lo).length().max(1e-6);
         commands
-            .spawn((Name::new(format!("preview {i}")), PreviewModel(i), Transform::default(), Visibility::default(), Propagate(layer)))
-            .with_child((WorldAssetRoot(scene), Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale)));
+            .spawn((
+                Name::new(format!("preview {i}")),
+                PreviewModel(i),
+                Transform::default(),
+                Visibility::default(),
+                Propagate(layer),
+            ))
+            .with_child((
+                WorldAssetRoot(scene),
+                Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale),
+            ));
     }
 }
 

@@ -13,8 +13,8 @@ use crate::args::AppArgs;
 use crate::camera::MainCamera;
 use crate::instancing::VoxelPool;
 use crate::library::{LibraryRequest, ModelLibrary};
-use crate::transition::ActiveTransition;
 use crate::stage::{Floor, KeyLight};
+use crate::transition::ActiveTransition;
 use crate::voxelize::VoxelModel;
 
 /// Frames allowed for the first model to appear before giving up.
@@ -63,7 +63,10 @@ fn probe(
     window: Vec2,
 ) -> ScreenshotProbe {
     let on_screen = |p: Vec3| {
-        camera.world_to_viewport(camera_transform, p).ok().filter(|s| s.x > 300.0 && s.x < window.x - 160.0 && s.y > 10.0 && s.y < window.y - 10.0)
+        camera
+            .world_to_viewport(camera_transform, p)
+            .ok()
+            .filter(|s| s.x > 300.0 && s.x < window.x - 160.0 && s.y > 10.0 && s.y < window.y - 10.0)
     };
     let eye = camera_transform.translation();
     let (centers, radius) = model.map_or((Vec::new(), 0.0), |m| {
@@ -72,7 +75,8 @@ fn probe(
     });
     // Every voxel centre's shadow on the floor, along the light's direction.
     let dir = light.forward().as_vec3();
-    let shadows: Vec<Vec3> = if dir.y < -1e-3 { centers.iter().map(|c| *c + dir * ((floor_y - c.y) / dir.y)).collect() } else { Vec::new() };
+    let shadows: Vec<Vec3> =
+        if dir.y < -1e-3 { centers.iter().map(|c| *c + dir * ((floor_y - c.y) / dir.y)).collect() } else { Vec::new() };
     let lit_visible = |p: Vec3| !blocked(p + Vec3::Y * 0.01, eye, &centers, radius);
     // The floor point deepest in the shadow (most voxel shadows around it) that the camera sees.
     let shadow = shadows
@@ -158,7 +162,9 @@ fn drive(
         return;
     }
     progress.requested = true;
-    if let (Ok((camera, camera_transform)), Ok(light), Ok(floor), Ok(window)) = (camera.single(), light.single(), floor.single(), window.single()) {
+    if let (Ok((camera, camera_transform)), Ok(light), Ok(floor), Ok(window)) =
+        (camera.single(), light.single(), floor.single(), window.single())
+    {
         let model = library.current_entry().and_then(|e| e.voxels.as_ref()).and_then(|h| models.get(h));
         let probe = probe(camera, camera_transform, light, floor.translation().y, model, window.size());
         let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
@@ -167,12 +173,11 @@ fn drive(
         }
     }
     info!("saving screenshot to {}", path.display());
-    commands
-        .spawn(Screenshot::primary_window())
-        .observe(save_to_disk(path.clone()))
-        .observe(|_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
+    commands.spawn(Screenshot::primary_window()).observe(save_to_disk(path.clone())).observe(
+        |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
             exit.write(AppExit::Success);
-        });
+        },
+    );
 }
 
 pub(super) fn plugin(app: &mut App) {

@@ -2,9 +2,9 @@
 //! rig that turns with the camera so the model always looks lit (the article's `lightHolder`).
 
 use bevy::asset::RenderAssetUsages;
+use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::light::{CascadeShadowConfigBuilder, NotShadowCaster, NotShadowReceiver, ShadowFilteringMethod};
 use bevy::mesh::{Indices, PrimitiveTopology};
-use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
 
 use crate::camera::MainCamera;
@@ -52,7 +52,14 @@ fn fading_disc(radius: f32, segments: u32, rings: u32) -> Mesh {
     }
     for r in 1..rings {
         for s in 0..segments {
-            indices.extend_from_slice(&[at(r, s), at(r, s + 1), at(r + 1, s + 1), at(r, s), at(r + 1, s + 1), at(r + 1, s)]);
+            indices.extend_from_slice(&[
+                at(r, s),
+                at(r, s + 1),
+                at(r + 1, s + 1),
+                at(r, s),
+                at(r + 1, s + 1),
+                at(r + 1, s),
+            ]);
         }
     }
     let normals = vec![[0.0, 1.0, 0.0]; positions.len()];
@@ -67,7 +74,10 @@ fn fading_disc(radius: f32, segments: u32, rings: u32) -> Mesh {
 fn gradient_quad(top: Color, bottom: Color) -> Mesh {
     let (t, b) = (top.to_linear().to_f32_array(), bottom.to_linear().to_f32_array());
     Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
-        .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, vec![[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]])
+        .with_inserted_attribute(
+            Mesh::ATTRIBUTE_POSITION,
+            vec![[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]],
+        )
         .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, vec![[0.0, 0.0, 1.0]; 4])
         .with_inserted_attribute(Mesh::ATTRIBUTE_COLOR, vec![b, b, t, t])
         .with_inserted_indices(Indices::U32(vec![0, 1, 2, 0, 2, 3]))
@@ -88,7 +98,12 @@ fn setup(
         commands.spawn((
             Name::new("backdrop"),
             Mesh3d(meshes.add(gradient_quad(GRADIENT_TOP, GRADIENT_BOTTOM))),
-            MeshMaterial3d(materials.add(StandardMaterial { base_color: Color::WHITE, unlit: true, fog_enabled: false, ..default() })),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::WHITE,
+                unlit: true,
+                fog_enabled: false,
+                ..default()
+            })),
             Transform::from_xyz(0.0, 0.0, -150.0).with_scale(Vec3::new(520.0, 170.0, 1.0)),
             NotShadowCaster,
             NotShadowReceiver,
@@ -110,13 +125,18 @@ fn setup(
         NotShadowCaster,
     ));
     let shadows = CascadeShadowConfigBuilder { num_cascades: 1, maximum_distance: 60.0, ..default() }.build();
-    commands
-        .spawn((Name::new("light rig"), LightRig, Transform::default(), Visibility::default()))
-        .with_children(|rig| {
+    commands.spawn((Name::new("light rig"), LightRig, Transform::default(), Visibility::default())).with_children(
+        |rig| {
             rig.spawn((
                 Name::new("key light"),
                 KeyLight,
-                DirectionalLight { illuminance: 7_000.0, shadow_maps_enabled: true, shadow_depth_bias: 0.06, shadow_normal_bias: 1.2, ..default() },
+                DirectionalLight {
+                    illuminance: 7_000.0,
+                    shadow_maps_enabled: true,
+                    shadow_depth_bias: 0.06,
+                    shadow_normal_bias: 1.2,
+                    ..default()
+                },
                 shadows,
                 Transform::from_xyz(3.0, 12.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
             ));
@@ -125,11 +145,15 @@ fn setup(
                 DirectionalLight { illuminance: 2_000.0, shadow_maps_enabled: false, ..default() },
                 Transform::from_xyz(-8.0, 3.0, 4.0).looking_at(Vec3::ZERO, Vec3::Y),
             ));
-        });
+        },
+    );
 }
 
 /// The light rig copies the camera's yaw.
-fn follow_camera(camera: Query<&Transform, (With<MainCamera>, Without<LightRig>)>, mut rig: Query<&mut Transform, With<LightRig>>) {
+fn follow_camera(
+    camera: Query<&Transform, (With<MainCamera>, Without<LightRig>)>,
+    mut rig: Query<&mut Transform, With<LightRig>>,
+) {
     let (Ok(camera), Ok(mut rig)) = (camera.single(), rig.single_mut()) else { return };
     let forward = camera.forward();
     let yaw = (-forward.x).atan2(-forward.z);
@@ -137,7 +161,12 @@ fn follow_camera(camera: Query<&Transform, (With<MainCamera>, Without<LightRig>)
 }
 
 /// The floor settles just under the current model.
-fn place_floor(library: Res<ModelLibrary>, models: Res<Assets<VoxelModel>>, time: Res<Time>, mut floor: Query<&mut Transform, With<Floor>>) {
+fn place_floor(
+    library: Res<ModelLibrary>,
+    models: Res<Assets<VoxelModel>>,
+    time: Res<Time>,
+    mut floor: Query<&mut Transform, With<Floor>>,
+) {
     let Ok(mut floor) = floor.single_mut() else { return };
     let bottom = library
         .current_entry()

@@ -13,8 +13,8 @@ use bevy::prelude::*;
 
 use crate::AppSystems;
 use crate::instancing::{
-    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color, placeholder_targets, targets_for, unpack_color,
-    voxel_global, voxel_transform,
+    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color,
+    placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
 };
 use crate::library::{ModelLibrary, ModelStatus};
 use crate::rng::Rng;
@@ -142,7 +142,10 @@ impl VoxelTween {
     /// Colour at the tween's current time.
     pub fn color(&self) -> [u8; 4] {
         let t = ((self.elapsed - self.color_delay) / self.color_duration.max(1e-6)).clamp(0.0, 1.0);
-        std::array::from_fn(|c| (f32::from(self.color_from[c]) + (f32::from(self.color_to[c]) - f32::from(self.color_from[c])) * t).round() as u8)
+        std::array::from_fn(|c| {
+            (f32::from(self.color_from[c]) + (f32::from(self.color_to[c]) - f32::from(self.color_from[c])) * t).round()
+                as u8
+        })
     }
 
     /// Whether the voxel shows at the tween's current time.
@@ -218,7 +221,11 @@ pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
 }
 
 /// The layout a model is shown with (ordered per the assignment).
-pub fn layout(model: &voxel_core::VoxelModel, settings: &VoxelSettings, transition: &TransitionSettings) -> Vec<VoxelTarget> {
+pub fn layout(
+    model: &voxel_core::VoxelModel,
+    settings: &VoxelSettings,
+    transition: &TransitionSettings,
+) -> Vec<VoxelTarget> {
     let mut targets = targets_for(model, settings.box_size);
     order_targets(&mut targets, transition.assignment);
     targets
@@ -318,7 +325,9 @@ fn start(
     let unturn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation.inverse());
     let mut slots: Vec<(Entity, u32, SlotState)> = voxels
         .iter()
-        .map(|(e, s, t, tag, v)| (e, s.0, (unturn * t.translation, t.scale, unpack_color(tag.0), *v != Visibility::Hidden)))
+        .map(|(e, s, t, tag, v)| {
+            (e, s.0, (unturn * t.translation, t.scale, unpack_color(tag.0), *v != Visibility::Hidden))
+        })
         .collect();
     slots.sort_unstable_by_key(|s| s.1);
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
@@ -353,7 +362,14 @@ fn start(
 type TweeningVoxels<'w, 's> = Query<
     'w,
     's,
-    (Entity, &'static mut VoxelTween, &'static mut Transform, &'static mut GlobalTransform, &'static mut MeshTag, &'static mut Visibility),
+    (
+        Entity,
+        &'static mut VoxelTween,
+        &'static mut Transform,
+        &'static mut GlobalTransform,
+        &'static mut MeshTag,
+        &'static mut Visibility,
+    ),
     Without<VoxelCloud>,
 >;
 
@@ -412,7 +428,12 @@ fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Lo
     if *done || pool.shown.is_some() || voxels.iter().len() < PLACEHOLDER_COUNT {
         return;
     }
-    crate::instancing::apply_targets(&mut pool, &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed), Quat::IDENTITY, &mut voxels);
+    crate::instancing::apply_targets(
+        &mut pool,
+        &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed),
+        Quat::IDENTITY,
+        &mut voxels,
+    );
     *done = true;
 }
 
@@ -456,6 +477,8 @@ mod tests {
         order_targets(&mut t, Assignment::Height);
         assert_eq!(t.iter().map(|t| t.position.y).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0]);
         assert_eq!(morton(Vec3::ZERO, Vec3::ZERO, 1.0), 0);
-        assert!(morton(Vec3::new(0.01, 0.01, 0.01), Vec3::ZERO, 1.0) < morton(Vec3::new(0.9, 0.0, 0.0), Vec3::ZERO, 1.0));
+        assert!(
+            morton(Vec3::new(0.01, 0.01, 0.01), Vec3::ZERO, 1.0) < morton(Vec3::new(0.9, 0.0, 0.0), Vec3::ZERO, 1.0)
+        );
     }
 }

@@ -25,7 +25,11 @@ fn model_list(ui: &mut egui::Ui, library: &ModelLibrary, requests: &mut MessageW
     for (i, entry) in library.entries.iter().enumerate() {
         let key = if i < 9 { format!("{} ", i + 1) } else { "   ".into() };
         let text = egui::RichText::new(format!("{key}{}{}", entry.name, status_mark(&entry.status)));
-        let text = if matches!(entry.status, ModelStatus::Failed(_)) { text.color(egui::Color32::from_rgb(200, 60, 60)) } else { text };
+        let text = if matches!(entry.status, ModelStatus::Failed(_)) {
+            text.color(egui::Color32::from_rgb(200, 60, 60))
+        } else {
+            text
+        };
         let response = ui.selectable_label(i == library.current, text);
         let response = match &entry.status {
             ModelStatus::Failed(reason) => response.on_hover_text(reason),
@@ -109,7 +113,10 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>,
     if let Some(model) = entry.voxels.as_ref().and_then(|h| models.get(h)) {
         let s = model.0.stats;
         ui.label(format!("{} voxels shown ({} filled, {} visible)", model.0.voxels.len(), s.voxels, s.visible));
-        ui.label(format!("grid {}×{}×{}, {} triangles, {} colours", s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors));
+        ui.label(format!(
+            "grid {}×{}×{}, {} triangles, {} colours",
+            s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
+        ));
         ui.label(format!("voxelized in {:.1} ms", entry.voxelize_ms));
     }
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));

@@ -165,13 +165,19 @@ fn setup(
         mesh: meshes.add(mesh::rounded_box(settings.roundness, 2)),
         material: materials.add(voxel_material()),
     };
-    pool.cloud = Some(commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible)).id());
+    pool.cloud =
+        Some(commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible)).id());
     grow_pool(&mut commands, &mut pool, &assets, PLACEHOLDER_COUNT);
     commands.insert_resource(assets);
 }
 
 /// The voxels' query: slot, transform, colour, visibility (the cloud excluded).
-pub type VoxelQuery<'w, 's> = Query<'w, 's, (&'static VoxelSlot, &'static mut Transform, &'static mut MeshTag, &'static mut Visibility), Without<VoxelCloud>>;
+pub type VoxelQuery<'w, 's> = Query<
+    'w,
+    's,
+    (&'static VoxelSlot, &'static mut Transform, &'static mut MeshTag, &'static mut Visibility),
+    Without<VoxelCloud>,
+>;
 
 /// Lays the voxels out for `targets` at once (in a cloud turned by `rotation`): slot i takes target i, the
 /// rest are hidden.
@@ -192,7 +198,13 @@ pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], rotation: Qu
 }
 
 /// Grows the pool for the model to show.
-fn grow_for_current(mut commands: Commands, mut pool: ResMut<VoxelPool>, assets: Option<Res<VoxelAssets>>, library: Res<ModelLibrary>, models: Res<Assets<VoxelModel>>) {
+fn grow_for_current(
+    mut commands: Commands,
+    mut pool: ResMut<VoxelPool>,
+    assets: Option<Res<VoxelAssets>>,
+    library: Res<ModelLibrary>,
+    models: Res<Assets<VoxelModel>>,
+) {
     let Some(assets) = assets else { return };
     let needed = library
         .current_entry()
@@ -206,7 +218,11 @@ fn grow_for_current(mut commands: Commands, mut pool: ResMut<VoxelPool>, assets:
 }
 
 /// Placeholder boxes bob gently while nothing is voxelized yet.
-fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>) {
+fn float_placeholder(
+    time: Res<Time>,
+    pool: Res<VoxelPool>,
+    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
+) {
     if pool.shown.is_some() {
         return;
     }
@@ -223,9 +239,18 @@ pub(super) fn plugin(app: &mut App) {
         app.init_asset::<VoxelMaterial>();
     }
     app.init_resource::<VoxelPool>();
-    app.register_type::<VoxelSlot>().register_type::<VoxelCloud>().register_type::<VoxelHome>().register_type::<RepelOffset>();
+    app.register_type::<VoxelSlot>()
+        .register_type::<VoxelCloud>()
+        .register_type::<VoxelHome>()
+        .register_type::<RepelOffset>();
     app.add_systems(Startup, setup);
-    app.add_systems(Update, (grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems), float_placeholder.in_set(AppSystems::Animate)));
+    app.add_systems(
+        Update,
+        (
+            grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems),
+            float_placeholder.in_set(AppSystems::Animate),
+        ),
+    );
 }
 
 /// Rendering: the material's pipeline.

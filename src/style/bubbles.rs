@@ -125,7 +125,8 @@ pub(super) fn burst(
                 if near { BubbleState::Bursting(0.0) } else { BubbleState::Whole }
             }
             BubbleState::Bursting(t) if t + dt >= timing.burst => {
-                let wait = timing.reform_min + (timing.reform_max - timing.reform_min) * Rng::new(seed ^ u64::from(slot.0) << 20).f32();
+                let wait = timing.reform_min
+                    + (timing.reform_max - timing.reform_min) * Rng::new(seed ^ u64::from(slot.0) << 20).f32();
                 BubbleState::Gone(wait)
             }
             BubbleState::Bursting(t) => BubbleState::Bursting(t + dt),

@@ -80,11 +80,16 @@ pub(super) fn control(
         return;
     }
     // Let go once the shown model has settled.
-    let (Some(id), true) = (pool.shown, requested.0 && active.running.is_none() && wanted == pool.shown) else { return };
+    let (Some(id), true) = (pool.shown, requested.0 && active.running.is_none() && wanted == pool.shown) else {
+        return;
+    };
     let Some(model) = models.get(id) else { return };
     // In slot order: query order depends on how tables were rearranged, and the pile must not.
-    let mut shown: Vec<(u32, Entity, Vec3)> =
-        voxels.iter().filter(|(_, _, _, v)| **v != Visibility::Hidden).map(|(e, s, g, _)| (s.0, e, g.translation())).collect();
+    let mut shown: Vec<(u32, Entity, Vec3)> = voxels
+        .iter()
+        .filter(|(_, _, _, v)| **v != Visibility::Hidden)
+        .map(|(e, s, g, _)| (s.0, e, g.translation()))
+        .collect();
     shown.sort_unstable_by_key(|s| s.0);
     let shown: Vec<(Entity, Vec3)> = shown.into_iter().map(|(_, e, p)| (e, p)).collect();
     if shown.is_empty() {

@@ -7,11 +7,17 @@ use crate::instancing::mesh::rounded_box;
 /// A Lego brick: a slightly bevelled body and a stud on top, the stud's top at the cell's top.
 pub fn brick() -> Mesh {
     let body_top = 0.32;
-    let body = rounded_box(0.04, 1)
-        .scaled_by(Vec3::new(1.0, body_top + 0.5, 1.0))
-        .translated_by(Vec3::new(0.0, (body_top - 0.5) / 2.0, 0.0));
+    let body = rounded_box(0.04, 1).scaled_by(Vec3::new(1.0, body_top + 0.5, 1.0)).translated_by(Vec3::new(
+        0.0,
+        (body_top - 0.5) / 2.0,
+        0.0,
+    ));
     let stud_height = 0.5 - body_top;
-    let stud = Cylinder::new(0.3, stud_height).mesh().resolution(20).build().translated_by(Vec3::new(0.0, body_top + stud_height / 2.0, 0.0));
+    let stud = Cylinder::new(0.3, stud_height).mesh().resolution(20).build().translated_by(Vec3::new(
+        0.0,
+        body_top + stud_height / 2.0,
+        0.0,
+    ));
     let mut mesh = body;
     // Both meshes carry positions, normals and UVs, so they merge.
     let _ = mesh.merge(&stud);
@@ -41,7 +47,9 @@ mod tests {
             assert!((hi - Vec3::splat(0.5)).abs().max_element() < 1e-3, "{hi}");
         }
         // The brick has a stud: vertices above the body inside the stud's radius only.
-        let Some(VertexAttributeValues::Float32x3(p)) = brick().attribute(Mesh::ATTRIBUTE_POSITION).cloned() else { panic!() };
+        let Some(VertexAttributeValues::Float32x3(p)) = brick().attribute(Mesh::ATTRIBUTE_POSITION).cloned() else {
+            panic!()
+        };
         assert!(p.iter().filter(|v| v[1] > 0.33).all(|v| (v[0] * v[0] + v[2] * v[2]).sqrt() <= 0.3 + 1e-4));
     }
 }

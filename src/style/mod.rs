@@ -77,7 +77,10 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(FixedUpdate, falling::step);
     app.add_systems(
         Update,
-        (bubbles::enter_and_leave, bubbles::burst).chain().in_set(AppSystems::Animate).after(crate::transition::TransitionSystems),
+        (bubbles::enter_and_leave, bubbles::burst)
+            .chain()
+            .in_set(AppSystems::Animate)
+            .after(crate::transition::TransitionSystems),
     );
     app.add_systems(Update, (place::place_settled, falling::sync, apply_look).in_set(AppSystems::Sync));
 }

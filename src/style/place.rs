@@ -90,7 +90,17 @@ impl<'a> VoxelRun<'a> {
         let (visibilities, visibilities_b) = self.visibilities.split_at_mut(mid);
         let (visibility_ticks, visibility_ticks_b) = self.visibility_ticks.split_at_mut(mid);
         (
-            VoxelRun { slots, homes, repels, bubbles, transforms, globals, global_ticks, visibilities, visibility_ticks },
+            VoxelRun {
+                slots,
+                homes,
+                repels,
+                bubbles,
+                transforms,
+                globals,
+                global_ticks,
+                visibilities,
+                visibility_ticks,
+            },
             VoxelRun {
                 slots: slots_b,
                 homes: homes_b,
@@ -179,7 +189,18 @@ pub(super) fn place_settled(
     cursor: Res<CursorRay>,
     cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
     pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &VoxelHome, &mut RepelOffset, Option<&Bubble>, &mut Transform, &mut GlobalTransform, &mut Visibility), Settled>,
+    mut voxels: Query<
+        (
+            &VoxelSlot,
+            &VoxelHome,
+            &mut RepelOffset,
+            Option<&Bubble>,
+            &mut Transform,
+            &mut GlobalTransform,
+            &mut Visibility,
+        ),
+        Settled,
+    >,
     mut springs: ResMut<RepelActive>,
     mut had_bubbles: Local<bool>,
     ticks: SystemChangeTick,

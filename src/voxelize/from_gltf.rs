@@ -105,13 +105,15 @@ impl Reader<'_> {
     fn mesh(&mut self, mesh: &GltfMesh, transform: &Mat4) -> Result<(), String> {
         for (k, primitive) in mesh.primitives.iter().enumerate() {
             let name = format!("{} primitive {k}", mesh.name);
-            let data = self.assets.mesh_data.get(&primitive.mesh).ok_or_else(|| format!("{name}: mesh data not loaded"))?;
+            let data =
+                self.assets.mesh_data.get(&primitive.mesh).ok_or_else(|| format!("{name}: mesh data not loaded"))?;
             let topology = data.primitive_topology();
             if !matches!(topology, PrimitiveTopology::TriangleList | PrimitiveTopology::TriangleStrip) {
                 continue;
             }
             let attribute = |id| data.try_attribute_option(id).map_err(|e| format!("{name}: {e}"));
-            let positions = float3(attribute(Mesh::ATTRIBUTE_POSITION)?).ok_or_else(|| format!("{name}: positions are not 3 floats"))?;
+            let positions = float3(attribute(Mesh::ATTRIBUTE_POSITION)?)
+                .ok_or_else(|| format!("{name}: positions are not 3 floats"))?;
             let (material, second_uv_set) = self.material(primitive.material.as_ref())?;
             let uv_id = if second_uv_set { Mesh::ATTRIBUTE_UV_1 } else { Mesh::ATTRIBUTE_UV_0 };
             let uvs = match attribute(uv_id)? {
@@ -137,7 +139,8 @@ impl Reader<'_> {
                     .collect(),
                 _ => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
             };
-            let world: Vec<[f32; 3]> = positions.iter().map(|p| transform.transform_point3(Vec3::from(*p)).to_array()).collect();
+            let world: Vec<[f32; 3]> =
+                positions.iter().map(|p| transform.transform_point3(Vec3::from(*p)).to_array()).collect();
             let part = self.soup.add_part(material, name);
             for tri in corners {
                 self.soup.push_triangle(
@@ -159,9 +162,15 @@ impl Reader<'_> {
 pub fn soup_from_gltf(gltf: &Gltf, assets: &GltfAssets<'_>) -> Result<TriangleSoup, String> {
     let children: HashSet<AssetId<GltfNode>> =
         gltf.nodes.iter().filter_map(|h| assets.nodes.get(h)).flat_map(|n| n.children.iter().map(Handle::id)).collect();
-    let mut stack: Vec<(Handle<GltfNode>, Mat4, usize)> =
-        gltf.nodes.iter().filter(|h| !children.contains(&h.id())).rev().map(|h| (h.clone(), Mat4::IDENTITY, 0)).collect();
-    let mut reader = Reader { assets, soup: TriangleSoup::default(), materials: HashMap::new(), textures: HashMap::new() };
+    let mut stack: Vec<(Handle<GltfNode>, Mat4, usize)> = gltf
+        .nodes
+        .iter()
+        .filter(|h| !children.contains(&h.id()))
+        .rev()
+        .map(|h| (h.clone(), Mat4::IDENTITY, 0))
+        .collect();
+    let mut reader =
+        Reader { assets, soup: TriangleSoup::default(), materials: HashMap::new(), textures: HashMap::new() };
     while let Some((handle, parent, depth)) = stack.pop() {
         if depth > MAX_DEPTH {
             return Err("the node hierarchy is too deep (or recursive)".into());

@@ -41,7 +41,11 @@ pub struct VoxelizeJob {
 }
 
 /// Starts a new generation when voxelization settings change.
-fn track_settings(settings: Res<VoxelSettings>, mut generation: ResMut<VoxelizeGeneration>, mut last: Local<Option<voxel_core::VoxelizeOptions>>) {
+fn track_settings(
+    settings: Res<VoxelSettings>,
+    mut generation: ResMut<VoxelizeGeneration>,
+    mut last: Local<Option<voxel_core::VoxelizeOptions>>,
+) {
     let options = settings.voxelize_options();
     if last.is_some_and(|l| l != options) {
         generation.0 += 1;
@@ -61,7 +65,8 @@ fn read_loaded(
     materials: Res<Assets<GltfMaterial>>,
     images: Res<Assets<Image>>,
 ) {
-    let assets = GltfAssets { nodes: &nodes, meshes: &meshes, mesh_data: &mesh_data, materials: &materials, images: &images };
+    let assets =
+        GltfAssets { nodes: &nodes, meshes: &meshes, mesh_data: &mesh_data, materials: &materials, images: &images };
     let mut failures = Vec::new();
     for (i, entry) in library.entries.iter_mut().enumerate() {
         if entry.status != ModelStatus::Loading || !asset_server.is_loaded_with_dependencies(&entry.gltf) {
@@ -144,5 +149,12 @@ fn finish_jobs(
 pub(super) fn plugin(app: &mut App) {
     app.init_asset::<VoxelModel>();
     app.init_resource::<VoxelizeGeneration>();
-    app.add_systems(Update, (track_settings, read_loaded, start_jobs, finish_jobs).chain().in_set(AppSystems::Simulate).in_set(VoxelizeSystems).after(LibrarySystems));
+    app.add_systems(
+        Update,
+        (track_settings, read_loaded, start_jobs, finish_jobs)
+            .chain()
+            .in_set(AppSystems::Simulate)
+            .in_set(VoxelizeSystems)
+            .after(LibrarySystems),
+    );
 }

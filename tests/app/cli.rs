@@ -41,7 +41,8 @@ fn a_bad_file_fails_the_call_but_not_the_others() {
     let junk = dir.join("junk.glb");
     std::fs::write(&junk, b"definitely not a model").unwrap();
     let missing = dir.join("missing.glb");
-    let out = voxelize(&[junk.to_str().unwrap(), missing.to_str().unwrap(), cube.to_str().unwrap(), "--json", "-r", "8"]);
+    let out =
+        voxelize(&[junk.to_str().unwrap(), missing.to_str().unwrap(), cube.to_str().unwrap(), "--json", "-r", "8"]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(stderr.contains(&format!("error: {}: not a valid glTF file", junk.display())), "{stderr}");
@@ -67,7 +68,13 @@ fn vox_export_reads_back() {
 #[test]
 fn folders_expand_to_their_models_and_the_draco_truck_is_refused() {
     let Some(models) = models_dir() else { return };
-    let out = voxelize(&[models.to_str().unwrap(), models.join("khronos-cesiummilktruck-draco").to_str().unwrap(), "--json", "-r", "24"]);
+    let out = voxelize(&[
+        models.to_str().unwrap(),
+        models.join("khronos-cesiummilktruck-draco").to_str().unwrap(),
+        "--json",
+        "-r",
+        "24",
+    ]);
     assert_eq!(out.status.code(), Some(1), "the Draco and meshopt files fail");
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert!(stdout.lines().count() >= 8, "{stdout}");

@@ -31,7 +31,11 @@ pub fn run_until(app: &mut App, limit: Duration, mut done: impl FnMut(&mut App) 
 
 /// Whether every entry has finished loading and voxelizing (or failed).
 pub fn all_settled(app: &mut App) -> bool {
-    app.world().resource::<ModelLibrary>().entries.iter().all(|e| matches!(e.status, ModelStatus::Ready | ModelStatus::Failed(_)))
+    app.world()
+        .resource::<ModelLibrary>()
+        .entries
+        .iter()
+        .all(|e| matches!(e.status, ModelStatus::Ready | ModelStatus::Failed(_)))
 }
 
 /// Presses `key` for one frame.

@@ -97,7 +97,11 @@ fn a_bad_file_becomes_an_error_entry_and_the_app_goes_on() {
     let ModelStatus::Failed(reason) = &junk_entry.status else { panic!("junk loaded: {:?}", junk_entry.status) };
     assert!(!reason.is_empty());
     let missing_entry = library.entries.iter().find(|e| e.name == "voxel-art-no-such-model").unwrap();
-    assert!(matches!(&missing_entry.status, ModelStatus::Failed(r) if r.contains("no such file")), "{:?}", missing_entry.status);
+    assert!(
+        matches!(&missing_entry.status, ModelStatus::Failed(r) if r.contains("no such file")),
+        "{:?}",
+        missing_entry.status
+    );
     assert!(library.last_error.is_some());
     let ready = library.entries.iter().filter(|e| e.status == ModelStatus::Ready).count();
     assert!(ready >= 6, "the good models still voxelize");
@@ -117,7 +121,8 @@ fn dropped_files_join_the_list_and_are_picked() {
     app.update();
     let before = app.world().resource::<ModelLibrary>().entries.len();
     let copy = temp_file("dropped-egg.glb", &std::fs::read(shipped("fried-egg.glb")).unwrap());
-    app.world_mut().write_message(bevy::window::FileDragAndDrop::DroppedFile { window: Entity::PLACEHOLDER, path_buf: copy });
+    app.world_mut()
+        .write_message(bevy::window::FileDragAndDrop::DroppedFile { window: Entity::PLACEHOLDER, path_buf: copy });
     run_until(&mut app, LIMIT, all_settled);
     let library = app.world().resource::<ModelLibrary>();
     assert_eq!(library.entries.len(), before + 1);
@@ -158,7 +163,8 @@ fn a_parameter_change_revoxelizes_and_stale_results_are_dropped() {
 
 /// Presses the left button, waits `hold` frames (1/60 s each), releases.
 fn click(app: &mut App, hold: usize, drag: f32) {
-    let window = app.world_mut().query_filtered::<Entity, With<bevy::window::PrimaryWindow>>().single(app.world()).unwrap();
+    let window =
+        app.world_mut().query_filtered::<Entity, With<bevy::window::PrimaryWindow>>().single(app.world()).unwrap();
     let set_cursor = |app: &mut App, x: f32| {
         app.world_mut().get_mut::<Window>(window).unwrap().set_cursor_position(Some(Vec2::new(x, 300.0)));
     };
@@ -198,7 +204,11 @@ fn per_voxel_systems_get_every_core_and_small_machines_run_schedules_on_one_thre
     let _app = test_app(AppArgs { no_shipped: true, ..Default::default() });
     let cores = bevy::tasks::available_parallelism();
     // With one compute thread Bevy's `par_iter` runs sequentially; the app's pool has one per core.
-    assert!(bevy::tasks::ComputeTaskPool::get().thread_num() >= cores, "{} compute threads on {cores} cores", bevy::tasks::ComputeTaskPool::get().thread_num());
+    assert!(
+        bevy::tasks::ComputeTaskPool::get().thread_num() >= cores,
+        "{} compute threads on {cores} cores",
+        bevy::tasks::ComputeTaskPool::get().thread_num()
+    );
     let mut fresh = App::new();
     fresh.add_plugins(MinimalPlugins.set(voxel_art::threads::task_pools()));
     let switched = voxel_art::threads::choose_executor(&mut fresh);

@@ -69,7 +69,8 @@ fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
     // The pile lies under the model.
     let model = shown_model(&app).unwrap();
     let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
-    let model_com = model.voxels.iter().map(|v| turn * Vec3::from(model.center(v))).sum::<Vec3>() / model.voxels.len() as f32;
+    let model_com =
+        model.voxels.iter().map(|v| turn * Vec3::from(model.center(v))).sum::<Vec3>() / model.voxels.len() as f32;
     let pile_com = pile.positions.iter().sum::<Vec3>() / pile.positions.len() as f32;
     let sideways = Vec2::new(pile_com.x - model_com.x, pile_com.z - model_com.z).length();
     assert!(sideways < 1.0, "the pile's centre is {sideways} from under the model's");
@@ -115,8 +116,17 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     let target = home_world(&mut app, 0);
     let far_slot = {
         let mut q = app.world_mut().query::<&VoxelSlot>();
-        let slots: Vec<u32> = q.iter(app.world()).map(|s| s.0).filter(|s| (*s as usize) < app.world().resource::<voxel_art::instancing::VoxelPool>().visible).collect();
-        *slots.iter().max_by(|a, b| home_world(&mut app, **a).distance(target).total_cmp(&home_world(&mut app, **b).distance(target))).unwrap()
+        let slots: Vec<u32> = q
+            .iter(app.world())
+            .map(|s| s.0)
+            .filter(|s| (*s as usize) < app.world().resource::<voxel_art::instancing::VoxelPool>().visible)
+            .collect();
+        *slots
+            .iter()
+            .max_by(|a, b| {
+                home_world(&mut app, **a).distance(target).total_cmp(&home_world(&mut app, **b).distance(target))
+            })
+            .unwrap()
     };
     let far_before = translation(&mut app, far_slot);
     app.insert_resource(CursorRay(Some(Ray3d::new(target + Vec3::Z * 20.0, Dir3::NEG_Z))));
@@ -135,7 +145,11 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     }
     assert_eq!(app.world().resource::<Replaced>().0, 0, "voxels at rest still rewritten every frame");
     let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
-    let shown: Vec<(u32, Vec3)> = q.iter(app.world()).filter(|(_, _, v)| **v != Visibility::Hidden).map(|(s, t, _)| (s.0, t.translation)).collect();
+    let shown: Vec<(u32, Vec3)> = q
+        .iter(app.world())
+        .filter(|(_, _, v)| **v != Visibility::Hidden)
+        .map(|(s, t, _)| (s.0, t.translation))
+        .collect();
     for (slot, at) in shown {
         let home = home_world(&mut app, slot);
         assert!(at.distance(home) < 1e-3, "slot {slot} did not spring back ({})", at.distance(home));
@@ -184,13 +198,17 @@ fn a_burst_bubble_vanishes_and_reforms_at_its_cell() {
 fn lego_uses_taller_cells_and_morphs_in_and_out() {
     let mut app = cherry_app();
     set_style(&mut app, Style::Lego);
-    run_until(&mut app, Duration::from_secs(60), |app| shown_model(app).is_some_and(|m| (m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5));
+    run_until(&mut app, Duration::from_secs(60), |app| {
+        shown_model(app).is_some_and(|m| (m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5)
+    });
     settle(&mut app);
     assert_shows_model(&mut app);
     let model = shown_model(&app).unwrap();
     assert!((model.spec.cell[1] / model.spec.cell[0] - 1.2).abs() < 1e-5);
     set_style(&mut app, Style::RoundedBoxes);
-    run_until(&mut app, Duration::from_secs(60), |app| shown_model(app).is_some_and(|m| m.spec.cell[1] == m.spec.cell[0]));
+    run_until(&mut app, Duration::from_secs(60), |app| {
+        shown_model(app).is_some_and(|m| m.spec.cell[1] == m.spec.cell[0])
+    });
     settle(&mut app);
     assert_shows_model(&mut app);
 }

@@ -8,8 +8,8 @@ use bevy::prelude::*;
 use voxel_art::args::AppArgs;
 use voxel_art::instancing::{VoxelCloud, VoxelPool, VoxelSlot, unpack_color, voxel_transform};
 use voxel_art::library::LibraryRequest;
-use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
 use voxel_art::settings::VoxelSettings;
+use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
 
 use crate::harness::{all_settled, run_until, test_app};
 use crate::logic::shown_model;
@@ -21,7 +21,10 @@ pub fn settle(app: &mut App) {
         let mut tweens = app.world_mut().query::<&VoxelTween>();
         let shown = app.world().resource::<VoxelPool>().shown;
         let wanted = shown_model(app).is_some() && shown.is_some();
-        if wanted && tweens.iter(app.world()).next().is_none() && app.world().resource::<ActiveTransition>().running.is_none() {
+        if wanted
+            && tweens.iter(app.world()).next().is_none()
+            && app.world().resource::<ActiveTransition>().running.is_none()
+        {
             return;
         }
     }
@@ -36,7 +39,9 @@ pub fn assert_shows_model(app: &mut App) -> usize {
     let transition = app.world().resource::<TransitionSettings>().clone();
     let targets = layout(&model, &settings, &transition);
     let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
-    let mut query = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &GlobalTransform, &MeshTag, &Visibility), Without<VoxelCloud>>();
+    let mut query = app
+        .world_mut()
+        .query_filtered::<(&VoxelSlot, &Transform, &GlobalTransform, &MeshTag, &Visibility), Without<VoxelCloud>>();
     let mut hidden = 0;
     for (slot, transform, global, tag, visibility) in query.iter(app.world()) {
         match targets.get(slot.0 as usize) {
@@ -44,7 +49,11 @@ pub fn assert_shows_model(app: &mut App) -> usize {
                 assert_eq!(*visibility, Visibility::Inherited, "slot {} hidden", slot.0);
                 let expected = voxel_transform(turn, t.position, t.scale);
                 assert!(transform.translation.distance(expected.translation) < 1e-4, "slot {} not on its cell", slot.0);
-                assert!(global.translation().distance(expected.translation) < 1e-4, "slot {} drawn off its cell", slot.0);
+                assert!(
+                    global.translation().distance(expected.translation) < 1e-4,
+                    "slot {} drawn off its cell",
+                    slot.0
+                );
                 assert_eq!(transform.scale, t.scale);
                 assert_eq!(unpack_color(tag.0), t.color, "slot {} colour", slot.0);
             }
@@ -67,9 +76,18 @@ fn ready_app() -> App {
 
 /// Positions of the visible voxels in the cloud's (model) frame.
 fn positions(app: &mut App) -> HashMap<u32, Vec3> {
-    let unturn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation.inverse();
+    let unturn = app
+        .world_mut()
+        .query_filtered::<&Transform, With<VoxelCloud>>()
+        .single(app.world())
+        .unwrap()
+        .rotation
+        .inverse();
     let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
-    q.iter(app.world()).filter(|(_, _, v)| **v != Visibility::Hidden).map(|(s, t, _)| (s.0, unturn * t.translation)).collect()
+    q.iter(app.world())
+        .filter(|(_, _, v)| **v != Visibility::Hidden)
+        .map(|(s, t, _)| (s.0, unturn * t.translation))
+        .collect()
 }
 
 #[test]
@@ -128,7 +146,8 @@ fn a_second_switch_half_way_starts_from_where_voxels_are() {
     assert!(after.len() > 500);
     for (slot, p) in after.iter().filter(|(slot, _)| before.contains_key(*slot)) {
         let jump = p.distance(before[slot]);
-        let limit = old_bounds.get(slot).copied().unwrap_or(0.0).max(new_bounds.get(slot).copied().unwrap_or(0.0)) * dt + 1e-4;
+        let limit =
+            old_bounds.get(slot).copied().unwrap_or(0.0).max(new_bounds.get(slot).copied().unwrap_or(0.0)) * dt + 1e-4;
         assert!(jump <= limit, "slot {slot} jumped {jump} (bound {limit})");
     }
     settle(&mut app);

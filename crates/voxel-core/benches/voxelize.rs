@@ -42,7 +42,9 @@ fn main() {
         return;
     }
     println!("threads: {}", rayon::current_num_threads());
-    println!("| model | triangles | load ms | R | voxels | fast ms | bvh-column ms | reference ms | reference / fast |");
+    println!(
+        "| model | triangles | load ms | R | voxels | fast ms | bvh-column ms | reference ms | reference / fast |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for file in files {
         let name = file.strip_prefix(&dir).unwrap_or(&file).display().to_string();

@@ -25,8 +25,16 @@ fn cherry() -> TriangleSoup {
     soup.add_mesh(&uv_sphere(1.0, 12).translated([-1.0, 0.0, 0.0]), red, "left cherry");
     soup.add_mesh(&uv_sphere(0.95, 12).translated([1.0, 0.15, 0.2]), red, "right cherry");
     let stem = rgb(0x4a7a1e);
-    soup.add_mesh(&cylinder(0.07, 0.0, 2.6, 8).rotated([0.0, 0.0, 1.0], -0.35).translated([-1.0, 0.8, 0.0]), stem, "left stem");
-    soup.add_mesh(&cylinder(0.07, 0.0, 2.5, 8).rotated([0.0, 0.0, 1.0], 0.45).translated([1.0, 0.9, 0.2]), stem, "right stem");
+    soup.add_mesh(
+        &cylinder(0.07, 0.0, 2.6, 8).rotated([0.0, 0.0, 1.0], -0.35).translated([-1.0, 0.8, 0.0]),
+        stem,
+        "left stem",
+    );
+    soup.add_mesh(
+        &cylinder(0.07, 0.0, 2.5, 8).rotated([0.0, 0.0, 1.0], 0.45).translated([1.0, 0.9, 0.2]),
+        stem,
+        "right stem",
+    );
     soup.add_mesh(&leaf(1.0, 0.45, 0.3).translated([0.9, 3.3, 0.1]), rgb(0x6abf3a), "leaf");
     soup
 }
@@ -86,7 +94,9 @@ fn mushroom() -> TriangleSoup {
     let mut soup = TriangleSoup::default();
     soup.add_mesh(&cylinder(0.42, 0.0, 1.5, 16).scaled([1.0, 1.0, 0.9]), rgb(0xf1e3c8), "stem");
     soup.add_mesh(&dome(1.5, 10, false).scaled([1.0, 0.75, 1.0]).translated([0.0, 1.35, 0.0]), rgb(0xd32f2f), "cap");
-    for (k, (a, h)) in [(0.3f32, 0.55f32), (1.6, 0.45), (2.9, 0.6), (4.2, 0.5), (5.3, 0.4), (0.0, 1.0)].iter().enumerate() {
+    for (k, (a, h)) in
+        [(0.3f32, 0.55f32), (1.6, 0.45), (2.9, 0.6), (4.2, 0.5), (5.3, 0.4), (0.0, 1.0)].iter().enumerate()
+    {
         let (r, y) = if k == 5 { (0.0, 1.12) } else { (1.5 * h.cos() * 0.95, 1.12 * h.sin() + 0.1) };
         let spot = uv_sphere(0.22, 6).scaled([1.0, 0.35, 1.0]);
         let tilt = if k == 5 { 0.0 } else { FRAC_PI_2 - h };

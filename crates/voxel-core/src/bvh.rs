@@ -23,10 +23,7 @@ fn padded(t: &GridTriangle) -> PaddedBounds {
     let lo = t[0].min(t[1]).min(t[2]);
     let hi = t[0].max(t[1]).max(t[2]);
     let pad = 1e-4 * (1.0 + hi.abs().max(lo.abs()).max_element());
-    PaddedBounds(Aabb::new(
-        Vec3A::from((lo - pad).as_vec3()),
-        Vec3A::from((hi + pad).as_vec3()),
-    ))
+    PaddedBounds(Aabb::new(Vec3A::from((lo - pad).as_vec3()), Vec3A::from((hi + pad).as_vec3())))
 }
 
 /// A BVH over the triangles of one model, built once.

@@ -131,7 +131,9 @@ struct Report<'a> {
 
 /// Whether a path names a glTF model.
 pub fn is_model_file(path: &Path) -> bool {
-    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
 }
 
 /// Expands folders into the model files they hold (sorted); files are kept as given.
@@ -140,7 +142,9 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Vec<PathBuf> {
     for input in inputs {
         if input.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(input)
-                .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_model_file(p)).collect())
+                .map(|rd| {
+                    rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_model_file(p)).collect()
+                })
                 .unwrap_or_default();
             found.sort();
             out.extend(found);
@@ -170,7 +174,8 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
     let vox = match &args.out {
         Some(out) => {
             if several {
-                std::fs::create_dir_all(out).map_err(|e| VoxelError::Export { path: out.clone(), reason: e.to_string() })?;
+                std::fs::create_dir_all(out)
+                    .map_err(|e| VoxelError::Export { path: out.clone(), reason: e.to_string() })?;
             }
             let path = vox_path(out, file, several);
             crate::vox::write_vox(&model, &path)?;
@@ -236,7 +241,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, &args, &options, several)));
+        let outcome =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, &args, &options, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {

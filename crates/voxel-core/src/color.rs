@@ -33,7 +33,12 @@ pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
         }
         rgba[3] *= f32::from(texel[3]) / 255.0;
     }
-    [linear_to_srgb(rgba[0]), linear_to_srgb(rgba[1]), linear_to_srgb(rgba[2]), (rgba[3].clamp(0.0, 1.0) * 255.0).round() as u8]
+    [
+        linear_to_srgb(rgba[0]),
+        linear_to_srgb(rgba[1]),
+        linear_to_srgb(rgba[2]),
+        (rgba[3].clamp(0.0, 1.0) * 255.0).round() as u8,
+    ]
 }
 
 /// RGB (0..1) → HSL (each 0..1), as three.js `Color.getHSL`.

@@ -190,14 +190,11 @@ mod tests {
                 DVec3::new(a.cos(), a.sin(), 0.0)
             })
             .collect();
-        let count = (0..6)
-            .filter(|&k| covers_column(&[DVec3::ZERO, ring[k], ring[(k + 1) % 6]], [0.0, 0.0]))
-            .count();
+        let count = (0..6).filter(|&k| covers_column(&[DVec3::ZERO, ring[k], ring[(k + 1) % 6]], [0.0, 0.0])).count();
         assert_eq!(count, 1);
         // Reversed winding everywhere gives the same count.
-        let count_rev = (0..6)
-            .filter(|&k| covers_column(&[DVec3::ZERO, ring[(k + 1) % 6], ring[k]], [0.0, 0.0]))
-            .count();
+        let count_rev =
+            (0..6).filter(|&k| covers_column(&[DVec3::ZERO, ring[(k + 1) % 6], ring[k]], [0.0, 0.0])).count();
         assert_eq!(count_rev, 1);
     }
 

@@ -16,18 +16,20 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Vec<u8> {
     let mut views = Vec::new();
     let mut accessors = Vec::new();
     let mut primitives = Vec::new();
-    let mut add_accessor = |bin: &mut Vec<u8>, data: Vec<f32>, kind: &str, count: usize, bounds: Option<([f32; 3], [f32; 3])>| {
-        let offset = bin.len();
-        push_f32s(bin, data);
-        views.push(serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset}));
-        let mut accessor = serde_json::json!({"bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind});
-        if let Some((lo, hi)) = bounds {
-            accessor["min"] = serde_json::json!(lo);
-            accessor["max"] = serde_json::json!(hi);
-        }
-        accessors.push(accessor);
-        accessors.len() - 1
-    };
+    let mut add_accessor =
+        |bin: &mut Vec<u8>, data: Vec<f32>, kind: &str, count: usize, bounds: Option<([f32; 3], [f32; 3])>| {
+            let offset = bin.len();
+            push_f32s(bin, data);
+            views.push(serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset}));
+            let mut accessor =
+                serde_json::json!({"bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind});
+            if let Some((lo, hi)) = bounds {
+                accessor["min"] = serde_json::json!(lo);
+                accessor["max"] = serde_json::json!(hi);
+            }
+            accessors.push(accessor);
+            accessors.len() - 1
+        };
     for (p, part) in soup.parts.iter().enumerate() {
         let tris: Vec<usize> = (0..soup.triangle_count()).filter(|&t| soup.triangle_parts[t] as usize == p).collect();
         if tris.is_empty() {

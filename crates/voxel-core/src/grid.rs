@@ -40,7 +40,13 @@ pub struct GridSpec {
 impl GridSpec {
     /// Fits a grid around `soup`: the bounding-box diagonal is scaled to `model_size` and centred at the
     /// origin; cells are `width` wide (x, z) and `width * height_ratio` tall (y).
-    pub fn fit(soup: &TriangleSoup, model_size: f32, size: GridSize, height_ratio: f32, max_cells: u64) -> Result<Self> {
+    pub fn fit(
+        soup: &TriangleSoup,
+        model_size: f32,
+        size: GridSize,
+        height_ratio: f32,
+        max_cells: u64,
+    ) -> Result<Self> {
         if !(model_size.is_finite() && model_size > 0.0) {
             return Err(VoxelError::Parameter(format!("model size must be positive, got {model_size}")));
         }

@@ -79,7 +79,13 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         return;
     }
     let an = n.abs();
-    let d = if an.x >= an.y && an.x >= an.z { 0 } else if an.y >= an.z { 1 } else { 2 };
+    let d = if an.x >= an.y && an.x >= an.z {
+        0
+    } else if an.y >= an.z {
+        1
+    } else {
+        2
+    };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     for iu in cell_of(u, lo[u])..=cell_of(u, hi[u]) {
         for iv in cell_of(v, lo[v])..=cell_of(v, hi[v]) {

@@ -49,10 +49,7 @@ impl Texture {
     /// Makes a texture, checking that the texel count matches the size.
     pub fn new(width: u32, height: u32, rgba: Vec<[u8; 4]>) -> Result<Self> {
         if width == 0 || height == 0 || rgba.len() != width as usize * height as usize {
-            return Err(VoxelError::Invalid(format!(
-                "texture of {width}x{height} with {} texels",
-                rgba.len()
-            )));
+            return Err(VoxelError::Invalid(format!("texture of {width}x{height} with {} texels", rgba.len())));
         }
         Ok(Self { width, height, rgba })
     }

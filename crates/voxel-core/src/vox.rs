@@ -113,21 +113,30 @@ pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
     let dims = [model.spec.dims[0], model.spec.dims[2], model.spec.dims[1]];
     let mut models = Vec::new();
     let mut scenes = vec![
-        SceneNode::Transform { attributes: Default::default(), frames: vec![Frame::new(Default::default())], child: 1, layer_id: u32::MAX },
+        SceneNode::Transform {
+            attributes: Default::default(),
+            frames: vec![Frame::new(Default::default())],
+            child: 1,
+            layer_id: u32::MAX,
+        },
         SceneNode::Group { attributes: Default::default(), children: Vec::new() },
     ];
     for (key, voxels) in blocks {
         let size: [u32; 3] = std::array::from_fn(|a| (dims[a] - key[a] * MAX_MODEL_EDGE).min(MAX_MODEL_EDGE));
         // MagicaVoxel places a model by its centre; keep the whole grid centred on the origin.
-        let t: [i64; 3] = std::array::from_fn(|a| {
-            i64::from(key[a] * MAX_MODEL_EDGE + size[a] / 2) - i64::from(dims[a] / 2)
-        });
+        let t: [i64; 3] =
+            std::array::from_fn(|a| i64::from(key[a] * MAX_MODEL_EDGE + size[a] / 2) - i64::from(dims[a] / 2));
         let transform_id = scenes.len() as u32;
         if let SceneNode::Group { children, .. } = &mut scenes[1] {
             children.push(transform_id);
         }
         let frame = Frame::new([("_t".to_string(), format!("{} {} {}", t[0], t[1], t[2]))].into_iter().collect());
-        scenes.push(SceneNode::Transform { attributes: Default::default(), frames: vec![frame], child: transform_id + 1, layer_id: 0 });
+        scenes.push(SceneNode::Transform {
+            attributes: Default::default(),
+            frames: vec![frame],
+            child: transform_id + 1,
+            layer_id: 0,
+        });
         scenes.push(SceneNode::Shape {
             attributes: Default::default(),
             models: vec![ShapeModel { model_id: models.len() as u32, attributes: Default::default() }],

@@ -223,10 +223,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
 /// Runs the per-column closure over every (x, y) column in parallel, concatenating results in order.
 fn per_column<T: Send>(spec: &GridSpec, f: impl Fn(u32, u32, usize) -> Vec<T> + Sync + Send) -> Vec<T> {
     let [nx, ny, nz] = spec.dims;
-    (0..nx * ny)
-        .into_par_iter()
-        .flat_map_iter(|col| f(col / ny, col % ny, col as usize * nz as usize))
-        .collect()
+    (0..nx * ny).into_par_iter().flat_map_iter(|col| f(col / ny, col % ny, col as usize * nz as usize)).collect()
 }
 
 /// Solid cells with an empty face neighbour (the grid's outside counts as empty), ascending.
@@ -295,7 +292,8 @@ fn surface_colors(
                 // the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
                 (0..=8)
                     .find_map(|r| {
-                        let steps: Box<dyn Iterator<Item = [i32; 3]>> = if r == 0 { Box::new(FACE_STEPS.into_iter()) } else { Box::new(cube_ring(r)) };
+                        let steps: Box<dyn Iterator<Item = [i32; 3]>> =
+                            if r == 0 { Box::new(FACE_STEPS.into_iter()) } else { Box::new(cube_ring(r)) };
                         let ring = steps.filter_map(|step| spec.offset(i, step));
                         let candidates = ring.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize));
                         nearest_among(tris, p, candidates).map(|(t, _)| t)

@@ -192,7 +192,9 @@ mod tests {
             let expected: Vec<u32> = if asleep[k] {
                 Vec::new()
             } else {
-                (0..sorted.len() as u32).filter(|&j| j as usize != k && sorted[k].distance(sorted[j as usize]) < reach).collect()
+                (0..sorted.len() as u32)
+                    .filter(|&j| j as usize != k && sorted[k].distance(sorted[j as usize]) < reach)
+                    .collect()
             };
             assert_eq!(found, expected, "sphere {k}");
         }

@@ -164,69 +164,78 @@ impl Pile {
         s.previous.clone_from(&self.positions);
         s.asleep.clear();
         s.asleep.extend(self.calm.iter().map(|c| *c >= p.sleep_steps));
-        self.positions.par_iter_mut().zip(self.velocities.par_iter_mut()).zip(s.asleep.par_iter()).for_each(|((x, v), sleeping)| {
-            if *sleeping {
-                return;
-            }
-            v.y -= p.gravity * p.dt;
-            *v *= damping;
-            *x += *v * p.dt;
-            x.y = x.y.max(rest);
-        });
+        self.positions.par_iter_mut().zip(self.velocities.par_iter_mut()).zip(s.asleep.par_iter()).for_each(
+            |((x, v), sleeping)| {
+                if *sleeping {
+                    return;
+                }
+                v.y -= p.gravity * p.dt;
+                *v *= damping;
+                *x += *v * p.dt;
+                x.y = x.y.max(rest);
+            },
+        );
     }
 
     /// Velocities from the corrected motion (sleepers stay still), with floor bounce and floor friction.
     fn velocities_from_motion(&mut self, s: &Scratch) {
         let p = self.params;
         let rest = p.floor + p.radius;
-        self.velocities.par_iter_mut().zip(self.positions.par_iter()).zip(s.previous.par_iter()).zip(s.asleep.par_iter()).for_each(|(((v, x), x0), asleep)| {
-            if *asleep {
-                *v = Vec3::ZERO;
-                return;
-            }
-            // What the relaxation added to the predicted velocity may stop an approach, but adds at most
-            // `separation_speed` on top: voxels packed closer than the spheres' diameter when they let go come
-            // apart without being launched.
-            let moved = (*x - *x0) / p.dt;
-            let correction = moved - *v;
-            let push = correction.length();
-            let mut nv = if push > 1e-9 {
-                let along = correction / push;
-                *v + along * push.min((-v.dot(along)).max(0.0) + p.separation_speed)
-            } else {
-                moved
-            };
-            if x.y <= rest + 1e-4 {
-                if v.y < 0.0 && nv.y <= 0.0 {
-                    nv.y = -v.y * p.restitution;
-                    if nv.y < p.gravity * p.dt * 2.0 {
-                        nv.y = 0.0;
-                    }
+        self.velocities
+            .par_iter_mut()
+            .zip(self.positions.par_iter())
+            .zip(s.previous.par_iter())
+            .zip(s.asleep.par_iter())
+            .for_each(|(((v, x), x0), asleep)| {
+                if *asleep {
+                    *v = Vec3::ZERO;
+                    return;
                 }
-                nv.x *= 1.0 - p.friction;
-                nv.z *= 1.0 - p.friction;
-            }
-            *v = nv;
-        });
+                // What the relaxation added to the predicted velocity may stop an approach, but adds at most
+                // `separation_speed` on top: voxels packed closer than the spheres' diameter when they let go come
+                // apart without being launched.
+                let moved = (*x - *x0) / p.dt;
+                let correction = moved - *v;
+                let push = correction.length();
+                let mut nv = if push > 1e-9 {
+                    let along = correction / push;
+                    *v + along * push.min((-v.dot(along)).max(0.0) + p.separation_speed)
+                } else {
+                    moved
+                };
+                if x.y <= rest + 1e-4 {
+                    if v.y < 0.0 && nv.y <= 0.0 {
+                        nv.y = -v.y * p.restitution;
+                        if nv.y < p.gravity * p.dt * 2.0 {
+                            nv.y = 0.0;
+                        }
+                    }
+                    nv.x *= 1.0 - p.friction;
+                    nv.z *= 1.0 - p.friction;
+                }
+                *v = nv;
+            });
     }
 
     /// Calm spheres fall asleep (only once they overlap less than `clear`, what would wake a sleeper);
     /// sleepers have no velocity.
     fn fall_asleep(&mut self, s: &Scratch, clear: f32) {
         let p = self.params;
-        self.velocities.par_iter_mut().zip(self.calm.par_iter_mut()).zip(s.overlap.par_iter()).for_each(|((v, calm), overlap)| {
-            if *calm >= p.sleep_steps {
-                return;
-            }
-            if v.length() < p.sleep_speed && *overlap < clear {
-                *calm += 1;
-            } else {
-                *calm = 0;
-            }
-            if *calm >= p.sleep_steps {
-                *v = Vec3::ZERO;
-            }
-        });
+        self.velocities.par_iter_mut().zip(self.calm.par_iter_mut()).zip(s.overlap.par_iter()).for_each(
+            |((v, calm), overlap)| {
+                if *calm >= p.sleep_steps {
+                    return;
+                }
+                if v.length() < p.sleep_speed && *overlap < clear {
+                    *calm += 1;
+                } else {
+                    *calm = 0;
+                }
+                if *calm >= p.sleep_steps {
+                    *v = Vec3::ZERO;
+                }
+            },
+        );
     }
 
     /// The largest speed.
@@ -310,7 +319,8 @@ impl Scratch {
         let touch = 2.0 * p.radius * 1.02;
         self.grid.gather(velocities, &mut self.sorted_velocities);
         self.rubbed.resize(self.sorted.len(), Vec3A::ZERO);
-        let (positions, asleep, contacts, before) = (&self.sorted, &self.sorted_asleep, &self.contacts, &self.sorted_velocities);
+        let (positions, asleep, contacts, before) =
+            (&self.sorted, &self.sorted_asleep, &self.contacts, &self.sorted_velocities);
         self.rubbed.par_iter_mut().enumerate().for_each(|(k, out)| {
             *out = before[k];
             if asleep[k] {
@@ -341,7 +351,9 @@ impl Scratch {
                 self.contacts
                     .of(k)
                     .iter()
-                    .filter(move |&&j| asleep[j as usize] && sorted[k].distance_squared(sorted[j as usize]) < near * near)
+                    .filter(move |&&j| {
+                        asleep[j as usize] && sorted[k].distance_squared(sorted[j as usize]) < near * near
+                    })
                     .map(move |&j| order[j as usize])
             })
             .collect()
@@ -428,7 +440,9 @@ mod tests {
         let cell = 0.24;
         let params = PileParams { contact_friction, ..PileParams::for_cell(cell, 0.0) };
         // A sleeping layer packed four times closer than the cells: a nearly flat surface.
-        let mut positions: Vec<Vec3> = (0..60).flat_map(|x| (0..12).map(move |z| Vec3::new(x as f32 * 0.25, 0.5, z as f32 * 0.25) * cell)).collect();
+        let mut positions: Vec<Vec3> = (0..60)
+            .flat_map(|x| (0..12).map(move |z| Vec3::new(x as f32 * 0.25, 0.5, z as f32 * 0.25) * cell))
+            .collect();
         let start = Vec3::new(2.0 * cell, 1.55 * cell, 1.5 * cell);
         positions.push(start);
         let mut pile = Pile::new(positions, params, 1);

@@ -77,10 +77,8 @@ fn read_strided(
         return Err(VoxelError::Invalid(format!("{what}: stride {stride} is smaller than an element ({elem})")));
     }
     if count > 0 {
-        let last_end = (count - 1)
-            .checked_mul(stride)
-            .and_then(|s| s.checked_add(offset))
-            .and_then(|s| s.checked_add(elem));
+        let last_end =
+            (count - 1).checked_mul(stride).and_then(|s| s.checked_add(offset)).and_then(|s| s.checked_add(elem));
         if last_end.is_none_or(|e| e > bytes.len()) {
             return Err(VoxelError::Invalid(format!(
                 "{what}: {count} elements of {elem} bytes do not fit in buffer view {} ({} bytes)",
@@ -120,8 +118,10 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &st
             gltf::accessor::sparse::IndexType::U16 => DataType::U16,
             gltf::accessor::sparse::IndexType::U32 => DataType::U32,
         };
-        let indices = read_strided(&sparse.indices().view(), buffers, sparse.indices().offset(), n, 1, idx_ty, false, what)?;
-        let subst = read_strided(&sparse.values().view(), buffers, sparse.values().offset(), n, ncomp, ty, normalized, what)?;
+        let indices =
+            read_strided(&sparse.indices().view(), buffers, sparse.indices().offset(), n, 1, idx_ty, false, what)?;
+        let subst =
+            read_strided(&sparse.values().view(), buffers, sparse.values().offset(), n, ncomp, ty, normalized, what)?;
         for (k, &index) in indices.iter().enumerate() {
             let i = index as usize;
             if i >= count {
@@ -134,7 +134,11 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &st
 }
 
 /// Reads an accessor of exactly `N` components per element (as f32).
-pub(crate) fn read_vecs<const N: usize>(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<[f32; N]>> {
+pub(crate) fn read_vecs<const N: usize>(
+    accessor: &Accessor<'_>,
+    buffers: &[Data],
+    what: &str,
+) -> Result<Vec<[f32; N]>> {
     let (values, ncomp) = read_accessor(accessor, buffers, what)?;
     if ncomp != N {
         return Err(VoxelError::Invalid(format!("{what}: expected {N} components per element, found {ncomp}")));

@@ -145,7 +145,8 @@ mod tests {
     fn texture_transform_offsets_scales_and_rotates() {
         let set = TexCoordSet { index: 0, offset: [0.5, 0.25], rotation: 0.0, scale: [2.0, 2.0] };
         assert_eq!(set.transform([0.25, 0.25]), [1.0, 0.75]);
-        let quarter = TexCoordSet { index: 0, offset: [0.0; 2], rotation: std::f32::consts::FRAC_PI_2, scale: [1.0; 2] };
+        let quarter =
+            TexCoordSet { index: 0, offset: [0.0; 2], rotation: std::f32::consts::FRAC_PI_2, scale: [1.0; 2] };
         let r = quarter.transform([1.0, 0.0]);
         assert!((r[0]).abs() < 1e-6 && (r[1] - 1.0).abs() < 1e-6, "{r:?}");
     }

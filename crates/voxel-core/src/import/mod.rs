@@ -47,10 +47,11 @@ pub fn load_file(path: &Path) -> Result<TriangleSoup> {
 
 /// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
 pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
     let document = validate(document)?;
-    let buffers = gltf::import_buffers(&document, base_dir, blob)
-        .map_err(|e| VoxelError::MissingData(format!("buffer: {e}")))?;
+    let buffers =
+        gltf::import_buffers(&document, base_dir, blob).map_err(|e| VoxelError::MissingData(format!("buffer: {e}")))?;
     let mut builder = SoupBuilder {
         soup: TriangleSoup::default(),
         materials: MaterialCache::new(base_dir),
@@ -118,7 +119,10 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
         roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY, Vec::new())).collect();
     while let Some((node, parent, mut chain)) = stack.pop() {
         if chain.contains(&node.index()) {
-            return Err(VoxelError::Invalid(format!("node {} is its own ancestor (recursive node graph)", node.index())));
+            return Err(VoxelError::Invalid(format!(
+                "node {} is its own ancestor (recursive node graph)",
+                node.index()
+            )));
         }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
@@ -148,9 +152,7 @@ fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
             .enumerate()
             .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
             .collect(),
-        Mode::TriangleFan => {
-            indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect()
-        }
+        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
         Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
     }
 }
@@ -194,7 +196,9 @@ impl SoupBuilder<'_> {
             let world: Vec<[f32; 3]> = prim
                 .positions
                 .iter()
-                .map(|p| transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array())
+                .map(|p| {
+                    transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
+                })
                 .collect();
             for tri in &prim.triangles {
                 let corners = tri.map(|i| {
@@ -211,8 +215,16 @@ impl SoupBuilder<'_> {
         Ok(())
     }
 
-    fn decode_primitive(&mut self, mesh: &gltf::Mesh<'_>, prim: &gltf::Primitive<'_>) -> Result<Option<DecodedPrimitive>> {
-        let name = format!("{} primitive {}", mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned), prim.index());
+    fn decode_primitive(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        prim: &gltf::Primitive<'_>,
+    ) -> Result<Option<DecodedPrimitive>> {
+        let name = format!(
+            "{} primitive {}",
+            mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned),
+            prim.index()
+        );
         if matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
             return Ok(None);
         }

@@ -121,17 +121,21 @@ fn missing_buffers_are_named() {
 #[test]
 fn degenerate_meshes_and_absurd_grids_are_errors() {
     // Every triangle collapsed onto one point.
-    let err = load_slice(&cube_glb(|_, bin| {
-        for v in 0..8 {
-            bin[v * 12..v * 12 + 12].copy_from_slice(&[0u8; 12]);
-        }
-    }), None)
+    let err = load_slice(
+        &cube_glb(|_, bin| {
+            for v in 0..8 {
+                bin[v * 12..v * 12 + 12].copy_from_slice(&[0u8; 12]);
+            }
+        }),
+        None,
+    )
     .and_then(|soup| voxelize(&soup, &VoxelizeOptions::default()))
     .unwrap_err()
     .to_string();
     assert!(err.contains("no triangles") || err.contains("coincide") || err.contains("zero area"), "{err}");
     let soup = load_slice(&cube_glb(|_, _| {}), None).unwrap();
-    let err = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(60_000), ..Default::default() }).unwrap_err();
+    let err =
+        voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(60_000), ..Default::default() }).unwrap_err();
     assert!(matches!(err, VoxelError::GridTooLarge { .. }), "{err}");
     let err = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Cell(-1.0), ..Default::default() }).unwrap_err();
     assert!(err.to_string().contains("grid size must be positive"), "{err}");
@@ -179,7 +183,8 @@ fn data_uri_buffers_and_triangle_strips_load() {
             bin.extend_from_slice(&c.to_le_bytes());
         }
     }
-    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
     let doc = serde_json::json!({
         "asset": {"version": "2.0"},
         "scenes": [{"nodes": [0]}],

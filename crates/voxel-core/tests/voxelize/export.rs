@@ -41,7 +41,9 @@ fn a_small_model_round_trips_with_its_colours() {
 #[test]
 fn big_grids_split_into_several_models_and_many_colours_are_quantized() {
     let cube = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
-    let mut m = voxelize(&cube, &VoxelizeOptions { grid: GridSize::Resolution(300), hollow: true, ..Default::default() }).unwrap();
+    let mut m =
+        voxelize(&cube, &VoxelizeOptions { grid: GridSize::Resolution(300), hollow: true, ..Default::default() })
+            .unwrap();
     // Give every voxel one of ~4000 colours.
     for (k, v) in m.voxels.iter_mut().enumerate() {
         v.color = [(k % 16 * 16) as u8, (k / 16 % 16 * 16) as u8, (k / 256 % 16 * 16) as u8, 255];

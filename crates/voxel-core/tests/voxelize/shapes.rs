@@ -3,9 +3,7 @@
 use std::collections::HashSet;
 
 use voxel_core::shapes::{cuboid, torus, uv_sphere};
-use voxel_core::{
-    FillMode, GridSize, Method, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize,
-};
+use voxel_core::{FillMode, GridSize, Method, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize};
 
 use crate::common::{at_resolution, cells};
 
@@ -89,12 +87,15 @@ fn a_torus_is_within_one_percent_of_its_volume_at_r64() {
 
 #[test]
 fn fast_bvh_and_reference_agree_cell_for_cell_on_shapes() {
-    for soup in [
-        TriangleSoup::from_mesh(&uv_sphere(1.0, 24), WHITE),
-        TriangleSoup::from_mesh(&torus(2.0, 0.7, 32), WHITE),
-    ] {
+    for soup in
+        [TriangleSoup::from_mesh(&uv_sphere(1.0, 24), WHITE), TriangleSoup::from_mesh(&torus(2.0, 0.7, 32), WHITE)]
+    {
         for r in [16, 33] {
-            let run = |method| cells(&voxelize(&soup, &VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(r) }).unwrap());
+            let run = |method| {
+                cells(
+                    &voxelize(&soup, &VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(r) }).unwrap(),
+                )
+            };
             let fast = run(Method::Fast);
             assert!(!fast.is_empty());
             assert_eq!(fast, run(Method::Reference), "R={r}");
@@ -132,8 +133,10 @@ fn hollow_keeps_exactly_the_cells_with_an_empty_face_neighbour() {
 fn output_is_the_same_whatever_the_thread_count() {
     let soup = TriangleSoup::from_mesh(&torus(2.0, 0.7, 48), WHITE);
     let opts = at_resolution(48);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| voxelize(&soup, &opts).unwrap());
-    let many = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| voxelize(&soup, &opts).unwrap());
+    let one =
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| voxelize(&soup, &opts).unwrap());
+    let many =
+        rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| voxelize(&soup, &opts).unwrap());
     assert_eq!(one, many);
 }
 
