@@ -50,7 +50,7 @@ impl Style {
 pub struct VoxelSettings {
     /// Cell width in model units (the model's diagonal is 9).
     pub grid_size: f32,
-    /// Fill mode: parity (default), flood or surface only.
+    /// Fill mode: winding (default), parity, flood or surface only.
     #[reflect(ignore)]
     pub fill: FillMode,
     /// Keep only voxels that can be seen (drops hidden interior voxels).
@@ -79,7 +79,7 @@ impl Default for VoxelSettings {
     fn default() -> Self {
         Self {
             grid_size: 0.24,
-            fill: FillMode::Parity,
+            fill: FillMode::Winding,
             hollow: true,
             pastel: true,
             box_size: 1.0,

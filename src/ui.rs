@@ -55,6 +55,7 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
     ui.add(egui::Slider::new(&mut settings.speed, 0.2..=3.0).text("speed"));
     ui.horizontal(|ui| {
         ui.label("fill");
+        ui.selectable_value(&mut settings.fill, FillMode::Winding, "winding");
         ui.selectable_value(&mut settings.fill, FillMode::Parity, "parity");
         ui.selectable_value(&mut settings.fill, FillMode::Flood, "flood");
         ui.selectable_value(&mut settings.fill, FillMode::None, "surface");

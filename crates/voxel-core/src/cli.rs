@@ -14,6 +14,7 @@ use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
 /// Interior mode on the command line.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum FillArg {
+    Winding,
     Parity,
     Flood,
     None,
@@ -55,7 +56,7 @@ struct Args {
     #[arg(long, default_value_t = 1.0)]
     cell_height: f32,
     /// How the interior is found.
-    #[arg(long, value_enum, default_value = "parity")]
+    #[arg(long, value_enum, default_value = "winding")]
     fill: FillArg,
     /// Which surface cells join the solid.
     #[arg(long, value_enum, default_value = "auto")]
@@ -91,6 +92,7 @@ impl Args {
             },
             cell_height_ratio: self.cell_height,
             fill: match self.fill {
+                FillArg::Winding => FillMode::Winding,
                 FillArg::Parity => FillMode::Parity,
                 FillArg::Flood => FillMode::Flood,
                 FillArg::None => FillMode::None,

@@ -1,5 +1,28 @@
-//! Solid fill: column parity (triangle-major rasterization or BVH column queries), the article's
-//! per-point reference, and flood fill from outside.
+//! Solid fill: column crossings (triangle-major rasterization or BVH column queries) counted by the
+//! nonzero winding rule or by parity, the article's per-point reference, and flood fill from outside.
+//!
+//! # The column count
+//!
+//! Every triangle has a [`Role`] (see [`crate::orient`], which orients the model's closed parts):
+//! a triangle of a closed, oriented part *enters* (+1) or *leaves* (−1) that part when a +Z column crosses
+//! it, by whether its outward side faces down or up; a triangle of a part that cannot be oriented (open,
+//! non-manifold) counts by *parity*. For a cell centre at height z_c, with the crossings at or below z_c:
+//!
+//! * W = the sum of the steps of the winding crossings (the winding number of the closed parts);
+//! * P = the number of parity crossings, modulo 2 — or 0 in a column with an odd number of parity
+//!   crossings (only open meshes give those; such a column is not filled by them, instead of being filled
+//!   down to the grid's floor);
+//! * the cell is inside when W + P ≠ 0.
+//!
+//! So closed parts fill by the nonzero rule (overlapping parts stay solid: W = 2), a cavity shell facing
+//! inwards cancels its surroundings (W = 1 − 1 = 0, or P + W = 1 − 1 = 0 inside a parity solid), and
+//! where only parity parts cross a column the rule is the article's parity. With every role `Parity`
+//! (`FillMode::Parity`) it is exactly whole-model parity. The sums depend only on which crossings lie at
+//! or below z_c, not on the order of crossings at equal depth, and the column test is exact, so a closed
+//! part's steps add up to zero in every column: the count from below equals the count from above, which
+//! is what the reference ([`reference_fill`]) uses.
+
+use std::sync::OnceLock;
 
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
@@ -8,9 +31,55 @@ use rayon::prelude::*;
 use crate::bvh::TriangleBvh;
 use crate::geom::{GridTriangle, covers_column, depth_at};
 use crate::grid::{BitGrid, GridSpec};
+use crate::orient::{Role, winding_roles};
+use crate::voxelize::{FillMode, Method};
 
-/// The z of every crossing of one column, ascending.
-type Column = Vec<f64>;
+/// One crossing of a +Z column (`column = x * ny + y`) with a triangle, at depth `z`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Crossing {
+    /// The column.
+    pub column: u32,
+    /// The triangle crossed.
+    pub triangle: u32,
+    /// The z where the column meets the triangle.
+    pub z: f64,
+}
+
+/// Every column's crossings in one flat list, sorted by column, then depth, then triangle.
+pub(crate) struct Columns {
+    /// Crossings of column c are `crossings[starts[c]..starts[c + 1]]`.
+    starts: Vec<usize>,
+    crossings: Vec<Crossing>,
+}
+
+impl Columns {
+    /// Indexes crossings already sorted by column (then depth, then triangle), for `count` columns.
+    fn from_sorted(count: usize, crossings: Vec<Crossing>) -> Self {
+        let mut starts = vec![0; count + 1];
+        for c in &crossings {
+            starts[c.column as usize + 1] += 1;
+        }
+        for c in 0..count {
+            starts[c + 1] += starts[c];
+        }
+        Self { starts, crossings }
+    }
+
+    /// The number of columns.
+    pub fn len(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// The crossings of column `col`, ascending by depth.
+    pub fn column(&self, col: usize) -> &[Crossing] {
+        &self.crossings[self.starts[col]..self.starts[col + 1]]
+    }
+}
+
+/// The order of crossings: column, depth, triangle (total, so sorting is deterministic).
+fn crossing_order(a: &Crossing, b: &Crossing) -> std::cmp::Ordering {
+    a.column.cmp(&b.column).then(a.z.total_cmp(&b.z)).then(a.triangle.cmp(&b.triangle))
+}
 
 /// Column centre (x, y) of column `col = x * ny + y`.
 fn column_center(spec: &GridSpec, col: usize) -> [f64; 2] {
@@ -29,21 +98,23 @@ fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
 }
 
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
-/// consistent tie-break of [`covers_column`]; the result is sorted by column, then depth.
-pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Vec<Column> {
+/// consistent tie-break of [`covers_column`].
+pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
-    let mut pairs: Vec<(u32, f64)> = tris
+    let mut crossings: Vec<Crossing> = tris
         .par_chunks(2048)
-        .flat_map_iter(|chunk| {
+        .enumerate()
+        .flat_map_iter(|(chunk_index, chunk)| {
             let mut out = Vec::new();
-            for t in chunk {
+            for (k, t) in chunk.iter().enumerate() {
+                let triangle = (chunk_index * 2048 + k) as u32;
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 for x in xs {
                     for y in ys.clone() {
                         let p = [f64::from(x) + 0.5, f64::from(y) + 0.5];
                         if covers_column(t, p) {
-                            out.push((x * ny + y, depth_at(t, p)));
+                            out.push(Crossing { column: x * ny + y, triangle, z: depth_at(t, p) });
                         }
                     }
                 }
@@ -51,61 +122,107 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
             out
         })
         .collect();
-    pairs.par_sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let mut columns = vec![Column::new(); spec.dims[0] as usize * ny as usize];
-    for (col, z) in pairs {
-        columns[col as usize].push(z);
-    }
-    columns
+    crossings.par_sort_unstable_by(crossing_order);
+    Columns::from_sorted(spec.dims[0] as usize * ny as usize, crossings)
 }
 
 /// Every column crossing, column-major: one BVH query per column (a box around the column's line).
-pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &TriangleBvh) -> Vec<Column> {
-    let columns = spec.dims[0] as usize * spec.dims[1] as usize;
-    (0..columns)
+pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &TriangleBvh) -> Columns {
+    let count = spec.dims[0] as usize * spec.dims[1] as usize;
+    let crossings = (0..count)
         .into_par_iter()
-        .map(|col| {
+        .flat_map_iter(|col| {
             let p = column_center(spec, col);
             let (x, y) = (p[0] as f32, p[1] as f32);
             let query = Aabb::new(Vec3A::new(x, y, f32::MIN), Vec3A::new(x, y, f32::MAX));
-            let mut zs = Vec::new();
+            let mut found = Vec::new();
             bvh.for_each_in_box(query, |t| {
                 if covers_column(&tris[t], p) {
-                    zs.push(depth_at(&tris[t], p));
+                    found.push(Crossing { column: col as u32, triangle: t as u32, z: depth_at(&tris[t], p) });
                 }
             });
-            zs.sort_unstable_by(f64::total_cmp);
-            zs
+            found.sort_unstable_by(crossing_order);
+            found
         })
-        .collect()
+        .collect();
+    Columns::from_sorted(count, crossings)
 }
 
-/// Cells of one column inside by parity: cell k is inside when an odd number of crossings lie at or below
-/// its centre k + 0.5. Columns with an odd number of crossings only occur on open meshes; they are left
-/// empty (the surface shell still covers them) instead of being filled down to the grid's floor.
-fn column_runs(zs: &[f64], nz: u32) -> impl Iterator<Item = std::ops::Range<u32>> + '_ {
-    let usable = if zs.len().is_multiple_of(2) { zs } else { &[] };
-    let to_cell = move |z: f64| (z - 0.5).ceil().clamp(0.0, f64::from(nz)) as u32;
-    usable.chunks_exact(2).map(move |pair| to_cell(pair[0])..to_cell(pair[1])).filter(|r| !r.is_empty())
+/// Whether a column's parity crossings count: only when there is an even number of them.
+pub(crate) fn parity_counts(crossings: &[Crossing], roles: &[Role]) -> bool {
+    crossings.iter().filter(|c| roles[c.triangle as usize] == Role::Parity).count().is_multiple_of(2)
 }
 
-/// Parity fill from per-column crossings.
-pub(crate) fn fill_columns(spec: &GridSpec, columns: &[Column]) -> BitGrid {
+/// Calls `emit` with the runs of cells of one column that are inside by the column count of the module
+/// docs: cell k is inside when W + P ≠ 0 for the crossings at or below its centre k + 0.5.
+fn column_runs(crossings: &[Crossing], roles: &[Role], nz: u32, mut emit: impl FnMut(std::ops::Range<u32>)) {
+    let parity_counts = parity_counts(crossings, roles);
+    let to_cell = |z: f64| (z - 0.5).ceil().clamp(0.0, f64::from(nz)) as u32;
+    let (mut winding, mut parity) = (0i32, 0i32);
+    let mut entered: Option<f64> = None;
+    for c in crossings {
+        match roles[c.triangle as usize] {
+            Role::Parity => parity ^= i32::from(parity_counts),
+            role => winding += role.step(),
+        }
+        let inside = winding + parity != 0;
+        match entered {
+            None if inside => entered = Some(c.z),
+            Some(z) if !inside => {
+                let run = to_cell(z)..to_cell(c.z);
+                if !run.is_empty() {
+                    emit(run);
+                }
+                entered = None;
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The solid from per-column crossings and the triangles' roles.
+fn fill_columns(spec: &GridSpec, columns: &Columns, roles: &[Role]) -> BitGrid {
     let nz = spec.dims[2];
     let mut grid = BitGrid::new(spec.cell_count());
-    for (col, zs) in columns.iter().enumerate() {
+    for col in 0..columns.len() {
         let base = col * nz as usize;
-        for run in column_runs(zs, nz) {
+        column_runs(columns.column(col), roles, nz, |run| {
             grid.set_range(base + run.start as usize..base + run.end as usize);
-        }
+        });
     }
     grid
 }
 
+/// The solid by the column count, with the roles of `fill` (winding or parity) and the crossings of
+/// `method`.
+pub(crate) fn solid_fill(
+    spec: &GridSpec,
+    tris: &[GridTriangle],
+    fill: FillMode,
+    method: Method,
+    bvh: &OnceLock<TriangleBvh>,
+) -> BitGrid {
+    let columns = match method {
+        Method::Fast => Some(crossings_by_rasterizing(spec, tris)),
+        Method::Bvh => Some(crossings_by_bvh(spec, tris, bvh.get_or_init(|| TriangleBvh::build(tris)))),
+        Method::Reference => None,
+    };
+    let roles = match fill {
+        FillMode::Winding => winding_roles(tris, columns.as_ref(), || crossings_by_rasterizing(spec, tris)),
+        _ => vec![Role::Parity; tris.len()],
+    };
+    match columns {
+        Some(columns) => fill_columns(spec, &columns, &roles),
+        None => reference_fill(spec, tris, &roles),
+    }
+}
+
 /// The article's algorithm, kept small and obviously correct: for every cell centre, cast one +Z ray
-/// against every triangle (brute force, no acceleration) and call the cell inside when the number of hits
-/// is odd. It uses the same robust column test as the fast paths.
-pub fn reference_fill(spec: &GridSpec, tris: &[GridTriangle]) -> BitGrid {
+/// against every triangle (brute force, no acceleration) and count the hits above the centre: the
+/// winding number W as the sum of the hits' outward facings (+1 leaving upwards), P as the parity of the
+/// parity hits; inside when W + P ≠ 0 (odd hits when every role is parity, the article's rule). It uses the
+/// same robust column test as the fast paths.
+fn reference_fill(spec: &GridSpec, tris: &[GridTriangle], roles: &[Role]) -> BitGrid {
     let [nx, ny, nz] = spec.dims;
     let inside: Vec<Vec<u32>> = (0..nx * ny)
         .into_par_iter()
@@ -114,8 +231,16 @@ pub fn reference_fill(spec: &GridSpec, tris: &[GridTriangle]) -> BitGrid {
             (0..nz)
                 .filter(|&k| {
                     let zc = f64::from(k) + 0.5;
-                    let hits = tris.iter().filter(|t| covers_column(t, p) && depth_at(t, p) > zc).count();
-                    hits % 2 == 1
+                    let (mut winding, mut parity) = (0i32, 0i32);
+                    for (t, role) in tris.iter().zip(roles) {
+                        if covers_column(t, p) && depth_at(t, p) > zc {
+                            match role {
+                                Role::Parity => parity ^= 1,
+                                role => winding -= role.step(),
+                            }
+                        }
+                    }
+                    winding + parity != 0
                 })
                 .collect()
         })
@@ -177,14 +302,36 @@ pub(crate) fn reachable_from_outside(spec: &GridSpec, walls: &BitGrid) -> BitGri
 mod tests {
     use super::*;
 
+    /// The runs of a column whose crossings are (z, role), triangle i having the i-th role.
+    fn runs(crossings: &[(f64, Role)]) -> Vec<std::ops::Range<u32>> {
+        let roles: Vec<Role> = crossings.iter().map(|c| c.1).collect();
+        let column: Vec<Crossing> =
+            crossings.iter().enumerate().map(|(i, c)| Crossing { column: 0, triangle: i as u32, z: c.0 }).collect();
+        let mut out = Vec::new();
+        column_runs(&column, &roles, 10, |r| out.push(r));
+        out
+    }
+
     #[test]
     fn runs_follow_parity_and_drop_odd_columns() {
-        let runs: Vec<_> = column_runs(&[1.2, 3.7, 5.0, 6.0], 10).collect();
-        assert_eq!(runs, vec![1..4, 5..6]);
-        assert_eq!(column_runs(&[1.2, 3.7, 5.0], 10).count(), 0);
+        use Role::Parity as P;
+        assert_eq!(runs(&[(1.2, P), (3.7, P), (5.0, P), (6.0, P)]), vec![1..4, 5..6]);
+        assert!(runs(&[(1.2, P), (3.7, P), (5.0, P)]).is_empty());
         // A crossing exactly at a centre: the centre counts as at-or-above, as in the reference (z > zc).
-        let runs: Vec<_> = column_runs(&[1.5, 3.5], 10).collect();
-        assert_eq!(runs, vec![1..3]);
+        assert_eq!(runs(&[(1.5, P), (3.5, P)]), vec![1..3]);
+    }
+
+    #[test]
+    fn runs_follow_the_winding_number() {
+        use Role::{Enters as E, Leaves as L, Parity as P};
+        // Two overlapping parts: the overlap (W = 2) stays inside, where parity would empty it.
+        assert_eq!(runs(&[(1.2, E), (3.2, E), (5.2, L), (7.2, L)]), vec![1..7]);
+        // A cavity facing inwards inside a part: W = 1 − 1 = 0 in it.
+        assert_eq!(runs(&[(1.2, E), (3.2, L), (5.2, E), (7.2, L)]), vec![1..3, 5..7]);
+        // The same cavity inside a parity solid: P + W = 1 − 1 = 0.
+        assert_eq!(runs(&[(1.2, P), (3.2, L), (5.2, E), (7.2, P)]), vec![1..3, 5..7]);
+        // An odd parity column ignores its parity crossings but keeps the winding part.
+        assert_eq!(runs(&[(0.2, P), (1.2, E), (3.2, L)]), vec![1..3]);
     }
 
     #[test]

@@ -14,6 +14,7 @@ pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
+mod orient;
 pub mod shapes;
 mod shell;
 pub mod soup;
@@ -21,7 +22,6 @@ pub mod vox;
 pub mod voxelize;
 
 pub use error::{Result, VoxelError};
-pub use fill::reference_fill;
 pub use grid::{BitGrid, GridSize, GridSpec};
 pub use import::{load_file, load_slice};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::error::{Result, VoxelError};
-use crate::fill::{crossings_by_bvh, crossings_by_rasterizing, fill_columns, reachable_from_outside, reference_fill};
+use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::{GridTriangle, closest_point_barycentric, point_at};
 use crate::grid::{BitGrid, GridSize, GridSpec};
 use crate::shell::{Shell, shell};
@@ -19,8 +19,12 @@ use crate::soup::TriangleSoup;
 /// How the inside of the model is found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FillMode {
-    /// Ray parity per grid column over the whole model (exact for closed models).
+    /// Nonzero winding number per grid column: closed parts are oriented outwards (or kept as cavities)
+    /// and overlapping parts stay solid; parts that cannot be oriented count by parity (see `fill`).
     #[default]
+    Winding,
+    /// Ray parity per grid column over the whole model (the article's rule; exact for closed models, but
+    /// the overlap of two parts counts as outside).
     Parity,
     /// Everything the outside cannot reach through the surface shell (tolerates holes below a cell).
     Flood,
@@ -40,7 +44,7 @@ pub enum ShellMode {
     None,
 }
 
-/// Which implementation computes the parity fill (all give the same cells).
+/// Which implementation computes the winding or parity fill (all give the same cells).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Method {
     /// Triangle-major rasterization of the column crossings.
@@ -67,7 +71,7 @@ pub struct VoxelizeOptions {
     pub shell: ShellMode,
     /// Keep only voxels with an empty face neighbour.
     pub hollow: bool,
-    /// Parity implementation.
+    /// Fill implementation.
     pub method: Method,
     /// Apply the pastel remap to colours.
     pub pastel: bool,
@@ -156,13 +160,9 @@ pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelM
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
     }
     let bvh = OnceLock::new();
-    let fill = match (options.fill, options.method) {
-        (FillMode::Parity, Method::Fast) => fill_columns(&spec, &crossings_by_rasterizing(&spec, &tris)),
-        (FillMode::Parity, Method::Bvh) => {
-            fill_columns(&spec, &crossings_by_bvh(&spec, &tris, bvh.get_or_init(|| TriangleBvh::build(&tris))))
-        }
-        (FillMode::Parity, Method::Reference) => reference_fill(&spec, &tris),
-        (FillMode::Flood | FillMode::None, _) => BitGrid::new(spec.cell_count()),
+    let fill = match options.fill {
+        FillMode::Winding | FillMode::Parity => solid_fill(&spec, &tris, options.fill, options.method, &bvh),
+        FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
     };
     let shell = shell(&spec, &tris, &fill);
     let solid = combine(&spec, options, fill, &shell);
@@ -191,7 +191,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
         shell_bits.set(c as usize);
     }
     match options.fill {
-        FillMode::Parity => {
+        FillMode::Winding | FillMode::Parity => {
             let mut solid = fill;
             match options.shell {
                 ShellMode::All => solid.union_with(&shell_bits),

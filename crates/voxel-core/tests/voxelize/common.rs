@@ -3,6 +3,7 @@
 use std::collections::HashSet;
 use std::path::PathBuf;
 
+use voxel_core::shapes::IndexedMesh;
 use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
 
 /// The folder of third-party test models, or `None` (with the reason printed) when absent.
@@ -32,6 +33,25 @@ pub fn at_resolution(r: u32) -> VoxelizeOptions {
 /// The set of filled cells of a model.
 pub fn cells(model: &VoxelModel) -> HashSet<[u16; 3]> {
     model.voxels.iter().map(|v| v.cell).collect()
+}
+
+/// Volume of the model in cells of the fitted grid, relative to an analytic volume in world units.
+pub fn relative_volume(model: &VoxelModel, world_volume: f64) -> f64 {
+    let cell = f64::from(model.spec.cell[0]) * f64::from(model.spec.cell[1]) * f64::from(model.spec.cell[2]);
+    let scale = f64::from(model.spec.scale);
+    model.voxels.len() as f64 * cell / (world_volume * scale.powi(3))
+}
+
+/// Rotates a mesh about x by `angle` and then about z by 0.6·`angle`.
+pub fn tilted(mut mesh: IndexedMesh, angle: f32) -> IndexedMesh {
+    let (s, c) = angle.sin_cos();
+    let (s2, c2) = (0.6 * angle).sin_cos();
+    for p in &mut mesh.positions {
+        let [x, y, z] = *p;
+        let (y, z) = (c * y - s * z, s * y + c * z);
+        *p = [c2 * x - s2 * y, s2 * x + c2 * y, z];
+    }
+    mesh
 }
 
 /// Packs a JSON document and a binary chunk into a .glb.

@@ -6,3 +6,4 @@ mod corpus;
 mod errors;
 mod export;
 mod shapes;
+mod winding;

@@ -3,18 +3,11 @@
 use std::collections::HashSet;
 
 use voxel_core::shapes::{cuboid, torus, uv_sphere};
-use voxel_core::{FillMode, GridSize, Method, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize};
+use voxel_core::{FillMode, GridSize, Method, ShellMode, TriangleSoup, VoxelizeOptions, voxelize};
 
-use crate::common::{at_resolution, cells};
+use crate::common::{at_resolution, cells, relative_volume, tilted};
 
 const WHITE: [f32; 4] = [1.0; 4];
-
-/// Volume of the model in cells of the fitted grid, relative to an analytic volume in world units.
-fn relative_volume(model: &VoxelModel, world_volume: f64) -> f64 {
-    let cell = f64::from(model.spec.cell[0]) * f64::from(model.spec.cell[1]) * f64::from(model.spec.cell[2]);
-    let scale = f64::from(model.spec.scale);
-    model.voxels.len() as f64 * cell / (world_volume * scale.powi(3))
-}
 
 #[test]
 fn an_axis_aligned_cube_gives_the_exact_cell_count() {
@@ -42,18 +35,6 @@ fn a_sphere_is_within_one_percent_of_its_volume_at_r64() {
     // Shell "all" overshoots: the reason auto is the default.
     let all = voxelize(&sphere, &VoxelizeOptions { shell: ShellMode::All, ..at_resolution(64) }).unwrap();
     assert!(relative_volume(&all, 4.0 / 3.0 * std::f64::consts::PI) > 1.04);
-}
-
-/// Rotates a mesh about x by `angle` and then about z by 0.6·`angle`.
-fn tilted(mut mesh: voxel_core::shapes::IndexedMesh, angle: f32) -> voxel_core::shapes::IndexedMesh {
-    let (s, c) = angle.sin_cos();
-    let (s2, c2) = (0.6 * angle).sin_cos();
-    for p in &mut mesh.positions {
-        let [x, y, z] = *p;
-        let (y, z) = (c * y - s * z, s * y + c * z);
-        *p = [c2 * x - s2 * y, s2 * x + c2 * y, z];
-    }
-    mesh
 }
 
 #[test]

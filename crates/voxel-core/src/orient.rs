@@ -1,0 +1,488 @@
+//! Orientation for the winding fill: finds the model's closed parts, orients each consistently and gives
+//! each triangle its [`Role`] in the column count of [`crate::fill`].
+//!
+//! # Parts
+//!
+//! Corners are welded by their exact grid-space position (the positions the column test sees). A *sheet*
+//! is a set of triangles connected through manifold edges (edges used by exactly two triangles); the walk
+//! over those edges orients it consistently (each triangle keeps or reverses its corner order; the sheet
+//! takes the orientation most of its triangles have in the file) unless a cycle contradicts itself. A
+//! sheet is *open* when it cannot be oriented or has a border edge (used once); a non-manifold edge (used
+//! three or more times) must be walked equally often in both directions by the sheets meeting there,
+//! otherwise they are all open (repeated until every edge balances). The sheets left form closed surfaces;
+//! a *closed part* is a set of them joined across the non-manifold edges they do not balance on their own.
+//! So a sphere whose equator is shared with a cylinder's rim (a capsule built of overlapping parts) is one
+//! closed part, two boxes sharing only an edge are two, and a box with a fin glued to one edge is a closed
+//! box and an open fin.
+//!
+//! # Orientation of a closed part
+//!
+//! With its sheets oriented as above (so a few reversed triangles, or every other one, are corrected),
+//! the part's signed volume tells whether it faces outwards (positive: it counts as it is) or inwards.
+//! A part facing inwards is a *cavity* and keeps that orientation — its winding is −1 inside, so it
+//! subtracts — only when no crossing of it with a grid column lies outside the material of the other
+//! parts: the parts facing outwards, by the nonzero rule, plus the parity sheets, by parity (a crossing in
+//! a column whose parity crossings do not pair up is outside only when it is outside the winding material
+//! too). That is the inner wall of a hollow ball, even one whose outer wall has a hole. Otherwise — an
+//! inside-out part on its own, or pushed half into another part — it is reversed as a whole and adds.
+//! (A whole file turned inside out therefore fills as if it were not, except that a cavity wall in it,
+//! now facing outwards, fills its cavity.)
+//!
+//! # Sheets that cannot be closed
+//!
+//! Open sheets (border edges: the fried egg's white, a model closed only through T-junctions), unbalanced
+//! non-manifold ones and non-orientable ones count by parity (see the column count in
+//! [`crate::fill`]), so a model made only of such parts fills exactly as whole-model parity did.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::DVec3;
+use rayon::prelude::*;
+use robust::{Coord, orient2d};
+
+use crate::fill::{Columns, parity_counts};
+use crate::geom::GridTriangle;
+
+/// How a triangle's column crossings count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Role {
+    /// A triangle of a closed part whose outward side faces down: a column crossing it upwards enters
+    /// the part (winding +1).
+    Enters,
+    /// A triangle of a closed part whose outward side faces up: crossing it upwards leaves (winding −1).
+    Leaves,
+    /// A triangle of a part that cannot be oriented: counts by parity.
+    Parity,
+}
+
+impl Role {
+    /// The change of the winding number when a column crosses the triangle upwards (0 for parity).
+    pub fn step(self) -> i32 {
+        match self {
+            Role::Enters => 1,
+            Role::Leaves => -1,
+            Role::Parity => 0,
+        }
+    }
+
+    /// The role of the triangle with its corner order reversed.
+    fn reversed(self) -> Self {
+        match self {
+            Role::Enters => Role::Leaves,
+            Role::Leaves => Role::Enters,
+            Role::Parity => Role::Parity,
+        }
+    }
+}
+
+/// Marks a triangle that belongs to no part (two corners at the same position: no surface).
+const NO_PART: u32 = u32::MAX;
+
+/// A corner's exact grid-space position as bits (−0 and +0 alike).
+fn position_key(v: DVec3) -> [u64; 3] {
+    [v.x, v.y, v.z].map(|c| (c + 0.0).to_bits())
+}
+
+/// A 64-bit mix (splitmix64's finalizer).
+fn mix(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// A hash of a position.
+fn position_hash(key: [u64; 3]) -> u64 {
+    key.iter().fold(0x9e37_79b9_7f4a_7c15, |h, &w| mix(h ^ w))
+}
+
+/// Edge `corner % 3` of triangle `corner / 3` runs from its corner k to corner k + 1.
+fn edge_ends(tris: &[GridTriangle], corner: u32) -> ([u64; 3], [u64; 3]) {
+    let t = &tris[corner as usize / 3];
+    let k = corner as usize % 3;
+    (position_key(t[k]), position_key(t[(k + 1) % 3]))
+}
+
+/// The edge of `corner` without its direction (ends in ascending order), and whether the corner's
+/// triangle walks it from the smaller end to the larger.
+fn undirected(tris: &[GridTriangle], corner: u32) -> ([[u64; 3]; 2], bool) {
+    let (a, b) = edge_ends(tris, corner);
+    if a < b { ([a, b], true) } else { ([b, a], false) }
+}
+
+/// Union–find over triangles that also tracks, for each triangle, whether its corner order must be
+/// reversed relative to its set's root for the set to be consistently oriented.
+struct OrientingUnionFind {
+    parent: Vec<u32>,
+    /// Reversed relative to the parent.
+    reversed: Vec<bool>,
+    size: Vec<u32>,
+    /// Per root: a cycle of constraints contradicted itself (the set cannot be oriented).
+    contradiction: Vec<bool>,
+}
+
+impl OrientingUnionFind {
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n as u32).collect(),
+            reversed: vec![false; n],
+            size: vec![1; n],
+            contradiction: vec![false; n],
+        }
+    }
+
+    /// The root of `t` and whether `t` is reversed relative to it (compressing the path).
+    fn find(&mut self, t: u32) -> (u32, bool) {
+        let (mut root, mut reversed) = (t, false);
+        while self.parent[root as usize] != root {
+            reversed ^= self.reversed[root as usize];
+            root = self.parent[root as usize];
+        }
+        let (mut node, mut node_reversed) = (t, reversed);
+        while self.parent[node as usize] != root && node != root {
+            let next = self.parent[node as usize];
+            let next_reversed = node_reversed ^ self.reversed[node as usize];
+            self.parent[node as usize] = root;
+            self.reversed[node as usize] = node_reversed;
+            (node, node_reversed) = (next, next_reversed);
+        }
+        (root, reversed)
+    }
+
+    /// Records that `a` and `b` share a manifold edge; `differ`: one of them must be reversed relative to
+    /// the other (they walk the edge in the same direction).
+    fn join(&mut self, a: u32, b: u32, differ: bool) {
+        let (ra, pa) = self.find(a);
+        let (rb, pb) = self.find(b);
+        if ra == rb {
+            self.contradiction[ra as usize] |= pa ^ pb != differ;
+            return;
+        }
+        let (big, small) = if self.size[ra as usize] >= self.size[rb as usize] { (ra, rb) } else { (rb, ra) };
+        self.parent[small as usize] = big;
+        self.reversed[small as usize] = pa ^ pb ^ differ;
+        self.size[big as usize] += self.size[small as usize];
+        self.contradiction[big as usize] |= self.contradiction[small as usize];
+    }
+}
+
+/// The model's closed parts.
+struct Parts {
+    /// The closed part of each triangle, or [`NO_PART`] (a triangle of an open sheet, or without area).
+    of: Vec<u32>,
+    /// Whether each triangle is reversed relative to its sheet's orientation (the one most of the sheet's
+    /// triangles have in the file).
+    reversed: Vec<bool>,
+    /// The number of closed parts.
+    count: usize,
+}
+
+impl Parts {
+    /// Finds the closed parts of `tris`.
+    fn find(tris: &[GridTriangle]) -> Self {
+        // Every edge of every triangle with three distinct corners, keyed by a hash of its two ends (the
+        // sum of their hashes: the same whichever way it is walked).
+        let mut edges: Vec<(u64, u32)> = (0..tris.len() as u32)
+            .into_par_iter()
+            .flat_map_iter(|t| {
+                let keys = tris[t as usize].map(position_key);
+                let hashes = keys.map(position_hash);
+                (0..3u32)
+                    .filter(move |_| has_area(keys))
+                    .map(move |k| (mix(hashes[k as usize].wrapping_add(hashes[(k as usize + 1) % 3])), 3 * t + k))
+            })
+            .collect();
+        edges.par_sort_unstable();
+        let mut union = OrientingUnionFind::new(tris.len());
+        // Border and non-manifold edges, as groups of corners walking the same edge.
+        let mut unpaired: Vec<Vec<u32>> = Vec::new();
+        for run in edges.chunk_by(|a, b| a.0 == b.0) {
+            for group in same_edge_groups(tris, run.iter().map(|e| e.1).collect()) {
+                if let [a, b] = group[..] {
+                    let (_, fa) = undirected(tris, a);
+                    let (_, fb) = undirected(tris, b);
+                    union.join(a / 3, b / 3, fa == fb);
+                } else {
+                    unpaired.push(group);
+                }
+            }
+        }
+        let sheets = Sheets::of(tris, union);
+        Self::close(tris, sheets, &unpaired)
+    }
+
+    /// Drops the sheets that cannot be part of a closed surface, then joins the rest into parts across
+    /// non-manifold edges.
+    fn close(tris: &[GridTriangle], sheets: Sheets, unpaired: &[Vec<u32>]) -> Self {
+        let Sheets { of: sheet_of, reversed, mut open } = sheets;
+        let sheet = |corner: u32| sheet_of[corner as usize / 3] as usize;
+        for group in unpaired.iter().filter(|g| g.len() == 1) {
+            open[sheet(group[0])] = true;
+        }
+        // A non-manifold edge must be walked equally often both ways by the sheets kept; where it is not,
+        // the sheets meeting there are dropped too (which may unbalance another edge: repeat).
+        let non_manifold: Vec<&Vec<u32>> = unpaired.iter().filter(|g| g.len() > 2).collect();
+        let mut changed = true;
+        while changed {
+            changed = false;
+            for group in &non_manifold {
+                let balance: i32 = group
+                    .iter()
+                    .filter(|&&c| !open[sheet(c)])
+                    .map(|&c| if undirected(tris, c).1 ^ reversed[c as usize / 3] { 1 } else { -1 })
+                    .sum();
+                if balance != 0 {
+                    for &c in group.iter() {
+                        changed |= !open[sheet(c)];
+                        open[sheet(c)] = true;
+                    }
+                }
+            }
+        }
+        // Parts: the kept sheets, joined where they close each other — across a non-manifold edge that
+        // they walk unequally often each way on their own (two boxes sharing an edge stay two parts).
+        let mut union = OrientingUnionFind::new(open.len());
+        for group in &non_manifold {
+            let mut balance: Vec<(usize, i32)> = Vec::new();
+            for &c in group.iter().filter(|&&c| !open[sheet(c)]) {
+                let step = if undirected(tris, c).1 ^ reversed[c as usize / 3] { 1 } else { -1 };
+                match balance.iter_mut().find(|(s, _)| *s == sheet(c)) {
+                    Some((_, sum)) => *sum += step,
+                    None => balance.push((sheet(c), step)),
+                }
+            }
+            let mut unbalanced = balance.iter().filter(|b| b.1 != 0).map(|b| b.0 as u32);
+            if let Some(first) = unbalanced.next() {
+                for other in unbalanced {
+                    union.join(first, other, false);
+                }
+            }
+        }
+        let mut part_of_root = vec![NO_PART; open.len()];
+        let mut parts = Self { of: vec![NO_PART; tris.len()], reversed, count: 0 };
+        for (t, &s) in sheet_of.iter().enumerate() {
+            let s = s as usize;
+            if s == NO_PART as usize || open[s] {
+                continue;
+            }
+            let root = union.find(s as u32).0 as usize;
+            if part_of_root[root] == NO_PART {
+                part_of_root[root] = parts.count as u32;
+                parts.count += 1;
+            }
+            parts.of[t] = part_of_root[root];
+        }
+        parts
+    }
+}
+
+/// Whether a triangle's corners (as position keys) are three different points.
+fn has_area(keys: [[u64; 3]; 3]) -> bool {
+    keys[0] != keys[1] && keys[1] != keys[2] && keys[2] != keys[0]
+}
+
+/// Sheets: triangles connected through manifold edges, each oriented consistently where it can be.
+struct Sheets {
+    /// The sheet of each triangle ([`NO_PART`] for triangles without three distinct corners).
+    of: Vec<u32>,
+    /// Whether each triangle is reversed relative to its sheet's orientation.
+    reversed: Vec<bool>,
+    /// Per sheet: whether it is open (so far: whether it cannot be oriented).
+    open: Vec<bool>,
+}
+
+impl Sheets {
+    /// Numbers the sets of `union` in order of their first triangle and orients each as most of its
+    /// triangles are in the file.
+    fn of(tris: &[GridTriangle], mut union: OrientingUnionFind) -> Self {
+        let n = tris.len();
+        let mut sheet_of_root = vec![NO_PART; n];
+        let mut sheets = Self { of: vec![NO_PART; n], reversed: vec![false; n], open: Vec::new() };
+        // Per sheet: triangles, and how many are reversed relative to the root.
+        let mut size: Vec<usize> = Vec::new();
+        let mut against_root: Vec<usize> = Vec::new();
+        for (t, tri) in tris.iter().enumerate() {
+            if !has_area(tri.map(position_key)) {
+                continue;
+            }
+            let (root, reversed) = union.find(t as u32);
+            if sheet_of_root[root as usize] == NO_PART {
+                sheet_of_root[root as usize] = sheets.open.len() as u32;
+                sheets.open.push(union.contradiction[root as usize]);
+                size.push(0);
+                against_root.push(0);
+            }
+            let s = sheet_of_root[root as usize];
+            sheets.of[t] = s;
+            sheets.reversed[t] = reversed;
+            size[s as usize] += 1;
+            against_root[s as usize] += usize::from(reversed);
+        }
+        for t in 0..n {
+            let s = sheets.of[t] as usize;
+            if s != NO_PART as usize && 2 * against_root[s] > size[s] {
+                sheets.reversed[t] = !sheets.reversed[t];
+            }
+        }
+        sheets
+    }
+}
+
+/// Splits corners whose edges have the same hash into groups walking the same edge (almost always one
+/// group: a hash collision of different edges is all but impossible, but is handled exactly).
+fn same_edge_groups(tris: &[GridTriangle], mut corners: Vec<u32>) -> Vec<Vec<u32>> {
+    if let [a, b] = corners[..]
+        && undirected(tris, a).0 == undirected(tris, b).0
+    {
+        return vec![corners];
+    }
+    corners.sort_by_key(|&c| (undirected(tris, c).0, c));
+    corners.chunk_by(|&a, &b| undirected(tris, a).0 == undirected(tris, b).0).map(<[u32]>::to_vec).collect()
+}
+
+/// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
+/// model's column crossings when the caller has them; they are computed here only when a part facing
+/// inwards needs the nesting test.
+pub(crate) fn winding_roles(
+    tris: &[GridTriangle],
+    columns: Option<&Columns>,
+    crossings: impl FnOnce() -> Columns,
+) -> Vec<Role> {
+    let parts = Parts::find(tris);
+    // Signed volume (×6) of each closed part with its sheets oriented as in the file.
+    let mut volume = vec![0.0f64; parts.count];
+    for (t, tri) in tris.iter().enumerate() {
+        if parts.of[t] != NO_PART {
+            let [a, b, c] = *tri;
+            let det = a.dot(b.cross(c));
+            volume[parts.of[t] as usize] += if parts.reversed[t] { -det } else { det };
+        }
+    }
+    // Facing inwards in the file: a negative volume.
+    let inward: Vec<bool> = volume.iter().map(|&v| v < 0.0).collect();
+    let mut roles: Vec<Role> = tris
+        .par_iter()
+        .enumerate()
+        .map(|(t, tri)| {
+            if parts.of[t] == NO_PART {
+                return Role::Parity;
+            }
+            let xy = |v: DVec3| Coord { x: v.x, y: v.y };
+            let faces_up = orient2d(xy(tri[0]), xy(tri[1]), xy(tri[2])) > 0.0;
+            if faces_up ^ parts.reversed[t] { Role::Leaves } else { Role::Enters }
+        })
+        .collect();
+    if !inward.contains(&true) {
+        return roles;
+    }
+    let computed;
+    let columns = match columns {
+        Some(c) => c,
+        None => {
+            computed = crossings();
+            &computed
+        }
+    };
+    let exposed = exposed_parts(columns, &roles, &parts.of, &inward);
+    for (t, role) in roles.iter_mut().enumerate() {
+        if parts.of[t] != NO_PART && exposed[parts.of[t] as usize] {
+            *role = role.reversed();
+        }
+    }
+    roles
+}
+
+/// Which parts facing inwards (`inward`) have a column crossing outside the material of the other parts
+/// (the winding of the parts not facing inwards plus the parity of the parity parts, counted from below;
+/// in a column with an odd number of parity crossings only a crossing inside winding material counts,
+/// the others are undecided).
+fn exposed_parts(columns: &Columns, roles: &[Role], part_of: &[u32], inward: &[bool]) -> Vec<bool> {
+    let exposed: Vec<AtomicBool> = inward.iter().map(|_| AtomicBool::new(false)).collect();
+    (0..columns.len()).into_par_iter().for_each(|col| {
+        let crossings = columns.column(col);
+        let parity_counts = parity_counts(crossings, roles);
+        let (mut winding, mut parity) = (0i32, 0i32);
+        for c in crossings {
+            let t = c.triangle as usize;
+            let part = part_of[t] as usize;
+            if part != NO_PART as usize && inward[part] {
+                // Outside: no material here — and known to be none, which a column whose parity crossings
+                // do not pair up (a hole in a parity part) cannot tell.
+                if winding + parity == 0 && parity_counts {
+                    exposed[part].store(true, Ordering::Relaxed);
+                }
+                continue;
+            }
+            match roles[t] {
+                Role::Parity => parity ^= i32::from(parity_counts),
+                role => winding += role.step(),
+            }
+        }
+    });
+    exposed.into_iter().map(AtomicBool::into_inner).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::{IndexedMesh, cuboid};
+
+    fn grid_tris(mesh: &IndexedMesh) -> Vec<GridTriangle> {
+        mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect()
+    }
+
+    /// Roles of a mesh with no column crossings at hand (none are needed unless a part faces inwards).
+    fn roles(tris: &[GridTriangle]) -> Vec<Role> {
+        winding_roles(tris, None, || panic!("no nesting test expected"))
+    }
+
+    #[test]
+    fn a_box_is_one_closed_part_and_its_bottom_enters() {
+        let tris = grid_tris(&cuboid([0.0; 3], [1.0; 3]));
+        let parts = Parts::find(&tris);
+        assert_eq!((parts.count, parts.of.iter().all(|&p| p == 0)), (1, true));
+        let r = roles(&tris);
+        // The bottom (z = 0, normal −Z) enters, the top leaves, the sides are edge-on.
+        for (t, tri) in tris.iter().enumerate() {
+            if tri.iter().all(|v| v.z == 0.0) {
+                assert_eq!(r[t], Role::Enters);
+            } else if tri.iter().all(|v| v.z == 1.0) {
+                assert_eq!(r[t], Role::Leaves);
+            }
+        }
+    }
+
+    #[test]
+    fn reversed_triangles_are_corrected() {
+        // Only the horizontal faces (the last four triangles) cross columns; the sides are edge-on.
+        let good = roles(&grid_tris(&cuboid([0.0; 3], [1.0; 3])));
+        for step in [3, 4] {
+            let mut mixed = cuboid([0.0; 3], [1.0; 3]);
+            for t in mixed.triangles.iter_mut().step_by(step) {
+                t.swap(1, 2);
+            }
+            assert_eq!(roles(&grid_tris(&mixed))[8..], good[8..], "every {step}th triangle reversed");
+        }
+    }
+
+    #[test]
+    fn open_and_non_manifold_parts_count_by_parity() {
+        let mut open = cuboid([0.0; 3], [1.0; 3]);
+        open.triangles.pop();
+        assert!(roles(&grid_tris(&open)).iter().all(|&r| r == Role::Parity));
+        // Two boxes sharing one edge: two closed parts. A fin on a box's edge: the box stays closed.
+        let mut two = cuboid([0.0; 3], [1.0; 3]);
+        let other = cuboid([1.0; 3], [2.0; 3]);
+        let base = two.positions.len() as u32;
+        two.positions.extend(&other.positions);
+        two.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+        let parts = Parts::find(&grid_tris(&two));
+        assert_eq!(parts.count, 2);
+        let mut fin = cuboid([0.0; 3], [1.0; 3]);
+        fin.positions.push([0.5, -0.5, 1.5]);
+        fin.triangles.push([4, 5, 8]);
+        let parts = Parts::find(&grid_tris(&fin));
+        assert_eq!(parts.count, 1);
+        assert_eq!(parts.of[..12], [0; 12]);
+        assert_eq!(parts.of[12], NO_PART);
+    }
+}

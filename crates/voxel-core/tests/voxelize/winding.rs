@@ -1,0 +1,215 @@
+//! The nonzero winding fill: overlapping parts stay solid, inconsistent orientation is corrected, cavities
+//! facing inwards are kept (shapes built in the test).
+
+use std::collections::HashSet;
+use std::f64::consts::PI;
+
+use voxel_core::shapes::{IndexedMesh, cuboid, cylinder, torus, uv_sphere};
+use voxel_core::{FillMode, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize};
+
+use crate::common::{at_resolution, cells, relative_volume, tilted};
+
+const WHITE: [f32; 4] = [1.0; 4];
+
+/// The slab pushed into the side of the unit sphere.
+const SLAB: ([f32; 3], [f32; 3]) = ([0.6, -0.35, -0.5], [1.3, 0.35, 0.5]);
+
+/// `mesh` with every triangle's corner order reversed (facing inwards).
+fn reversed(mut mesh: IndexedMesh) -> IndexedMesh {
+    for t in &mut mesh.triangles {
+        t.swap(1, 2);
+    }
+    mesh
+}
+
+/// `a` and `b` as one indexed mesh (one primitive; they share no vertex).
+fn merged(mut a: IndexedMesh, b: &IndexedMesh) -> IndexedMesh {
+    let base = a.positions.len() as u32;
+    a.positions.extend(&b.positions);
+    a.triangles.extend(b.triangles.iter().map(|t| t.map(|i| i + base)));
+    a
+}
+
+/// Whether `p` lies in the union of the unit sphere and the slab, both shrunk by `margin`.
+fn in_sphere_and_slab(p: [f64; 3], margin: f64) -> bool {
+    let in_slab = (0..3).all(|a| p[a] > f64::from(SLAB.0[a]) + margin && p[a] < f64::from(SLAB.1[a]) - margin);
+    in_slab || p.iter().map(|c| c * c).sum::<f64>().sqrt() < 1.0 - margin
+}
+
+/// The volume of the sphere ∪ slab: the sphere plus the slab's part outside it, integrated along x
+/// (exactly) over a fine midpoint grid in y and z.
+fn sphere_and_slab_volume() -> f64 {
+    let ([x0, y0, z0], [x1, y1, z1]) = (SLAB.0.map(f64::from), SLAB.1.map(f64::from));
+    let n = 2000;
+    let (dy, dz) = ((y1 - y0) / f64::from(n), (z1 - z0) / f64::from(n));
+    let mut outside = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let (y, z) = (y0 + (f64::from(i) + 0.5) * dy, z0 + (f64::from(j) + 0.5) * dz);
+            let sphere_x = (1.0 - y * y - z * z).max(0.0).sqrt();
+            outside += x1 - sphere_x.clamp(x0, x1);
+        }
+    }
+    4.0 / 3.0 * PI + outside * dy * dz
+}
+
+/// The sphere and the slab (possibly reversed) as one primitive and as two.
+fn sphere_and_slab(slab_reversed: bool) -> [TriangleSoup; 2] {
+    let sphere = uv_sphere(1.0, 128);
+    let slab = cuboid(SLAB.0, SLAB.1);
+    let slab = if slab_reversed { reversed(slab) } else { slab };
+    let mut two = TriangleSoup::from_mesh(&sphere, WHITE);
+    two.add_mesh(&slab, WHITE, "slab");
+    [TriangleSoup::from_mesh(&merged(sphere, &slab), WHITE), two]
+}
+
+fn with_fill(fill: FillMode, r: u32) -> VoxelizeOptions {
+    VoxelizeOptions { fill, ..at_resolution(r) }
+}
+
+#[test]
+fn a_slab_pushed_into_a_sphere_fills_the_union() {
+    let union = sphere_and_slab_volume();
+    for slab_reversed in [false, true] {
+        for (primitives, soup) in [1, 2].iter().zip(sphere_and_slab(slab_reversed)) {
+            let m = voxelize(&soup, &at_resolution(64)).unwrap();
+            let rel = relative_volume(&m, union);
+            assert!((rel - 1.0).abs() < 0.01, "reversed {slab_reversed}, {primitives} primitive(s): {rel}");
+            // Parity empties the overlap (the test can tell the two apart).
+            let parity = voxelize(&soup, &with_fill(FillMode::Parity, 64)).unwrap();
+            assert!(relative_volume(&parity, union) < 0.97, "parity keeps the overlap");
+        }
+    }
+}
+
+#[test]
+fn two_overlapping_boxes_in_one_primitive_give_exactly_the_union_cells() {
+    let (a, b) = (([0.0, 0.0, 0.0], [4.0, 3.0, 3.0]), ([2.0, 1.0, 1.0], [6.0, 4.0, 4.0]));
+    let soup = TriangleSoup::from_mesh(&merged(cuboid(a.0, a.1), &cuboid(b.0, b.1)), WHITE);
+    // The 6 × 4 × 4 bounds at R = 12: cells 0.5 wide, every face on a cell boundary.
+    // The fill alone: the auto shell adds the cells a face on an interior cell boundary touches along its
+    // edge (the row above the box's top face, for one), with either fill.
+    let fill_only = |fill| VoxelizeOptions { shell: ShellMode::None, ..with_fill(fill, 12) };
+    let m = voxelize(&soup, &fill_only(FillMode::Winding)).unwrap();
+    assert_eq!(m.spec.dims, [12, 8, 8]);
+    let in_box = |c: [u32; 3], (lo, hi): ([f32; 3], [f32; 3])| {
+        let (lo, hi) = (m.spec.to_grid(lo), m.spec.to_grid(hi));
+        (0..3).all(|k| (lo[k]..hi[k]).contains(&(f64::from(c[k]) + 0.5)))
+    };
+    let mut expected = HashSet::new();
+    for x in 0..12 {
+        for y in 0..8 {
+            for z in 0..8 {
+                if in_box([x, y, z], a) || in_box([x, y, z], b) {
+                    expected.insert([x, y, z].map(|v| v as u16));
+                }
+            }
+        }
+    }
+    assert_eq!(expected.len(), 8 * 6 * 6 * 2 - 4 * 4 * 4);
+    let got = cells(&m);
+    let mut wrong: Vec<_> = got.symmetric_difference(&expected).collect();
+    wrong.sort();
+    assert!(wrong.is_empty(), "{} cells, {} expected; wrong: {wrong:?}", got.len(), expected.len());
+    let parity = voxelize(&soup, &fill_only(FillMode::Parity)).unwrap();
+    assert_eq!(parity.voxels.len(), expected.len() - 4 * 4 * 4, "parity empties the overlap");
+}
+
+#[test]
+fn an_inside_out_torus_and_a_half_reversed_sphere_keep_their_volume() {
+    let (major, minor) = (2.0f64, 0.6f64);
+    let inside_out = reversed(tilted(torus(major as f32, minor as f32, 256), 0.5));
+    let m = voxelize(&TriangleSoup::from_mesh(&inside_out, WHITE), &at_resolution(64)).unwrap();
+    let rel = relative_volume(&m, 2.0 * PI * PI * major * minor * minor);
+    assert!((rel - 1.0).abs() < 0.01, "inside-out torus: {rel}");
+    // Every other triangle reversed, and the upper half reversed.
+    let sphere = 4.0 / 3.0 * PI;
+    for pattern in [|t: usize, _: usize| t.is_multiple_of(2), |t: usize, n: usize| t < n / 2] {
+        let mut mesh = uv_sphere(1.0, 128);
+        let n = mesh.triangles.len();
+        for (t, tri) in mesh.triangles.iter_mut().enumerate() {
+            if pattern(t, n) {
+                tri.swap(1, 2);
+            }
+        }
+        let m = voxelize(&TriangleSoup::from_mesh(&mesh, WHITE), &at_resolution(64)).unwrap();
+        let rel = relative_volume(&m, sphere);
+        assert!((rel - 1.0).abs() < 0.01, "half-reversed sphere: {rel}");
+    }
+}
+
+/// Filled cells whose centre lies within `radius` of the grid's centre.
+fn filled_near_centre(m: &VoxelModel, radius: f32) -> usize {
+    m.voxels.iter().filter(|v| m.center(v).iter().map(|c| c * c).sum::<f32>().sqrt() < radius).count()
+}
+
+#[test]
+fn a_hollow_ball_keeps_its_cavity() {
+    // Outer shell outwards, inner shell inwards: the cavity stays empty, as one primitive and as two.
+    let (outer, inner) = (uv_sphere(1.0, 96), reversed(uv_sphere(0.5, 64)));
+    let mut two = TriangleSoup::from_mesh(&outer, WHITE);
+    two.add_mesh(&inner, WHITE, "cavity");
+    let shell_volume = 4.0 / 3.0 * PI * (1.0 - 0.125);
+    for soup in [TriangleSoup::from_mesh(&merged(outer.clone(), &inner), WHITE), two] {
+        let m = voxelize(&soup, &at_resolution(64)).unwrap();
+        let rel = relative_volume(&m, shell_volume);
+        assert!((rel - 1.0).abs() < 0.01, "hollow ball: {rel}");
+        // Normalized, the radius is 9 / (2√3) ≈ 2.6: nothing within 0.4 of the inner radius 1.3.
+        assert_eq!(filled_near_centre(&m, 0.9), 0);
+    }
+    // The same cavity inside an outer shell with a hole (open: counted by parity) is kept too.
+    let mut holed = outer.clone();
+    holed.triangles.remove(2000);
+    let m = voxelize(&TriangleSoup::from_mesh(&merged(holed, &inner), WHITE), &at_resolution(64)).unwrap();
+    assert!((relative_volume(&m, shell_volume) - 1.0).abs() < 0.01);
+    assert_eq!(filled_near_centre(&m, 0.9), 0);
+}
+
+#[test]
+fn a_capsule_of_overlapping_parts_is_within_one_percent_of_its_volume() {
+    let r = 0.5f32;
+    let capsule = merged(
+        merged(cylinder(r, -1.0, 1.0, 256), &uv_sphere(r, 128).translated([0.0, 1.0, 0.0])),
+        &uv_sphere(r, 128).translated([0.0, -1.0, 0.0]),
+    );
+    let soup = TriangleSoup::from_mesh(&tilted(capsule, 0.4), WHITE);
+    let r = f64::from(r);
+    let volume = PI * r * r * 2.0 + 4.0 / 3.0 * PI * r.powi(3);
+    let rel = relative_volume(&voxelize(&soup, &at_resolution(64)).unwrap(), volume);
+    assert!((rel - 1.0).abs() < 0.01, "capsule: {rel}");
+}
+
+#[test]
+fn hollow_sphere_and_slab_has_no_wall_around_an_empty_inside() {
+    for fill in [FillMode::Winding, FillMode::Parity] {
+        let soup = &sphere_and_slab(false)[0];
+        let solid = cells(&voxelize(soup, &with_fill(fill, 64)).unwrap());
+        let hollow = voxelize(soup, &VoxelizeOptions { hollow: true, ..with_fill(fill, 64) }).unwrap();
+        let cell = f64::from(hollow.spec.cell[0]) / f64::from(hollow.spec.scale);
+        // Kept cells with a face neighbour that is empty although it lies a cell deep inside the union.
+        let walls = hollow
+            .voxels
+            .iter()
+            .filter(|v| {
+                (0..3).any(|a| {
+                    [-1i32, 1].into_iter().any(|d| {
+                        let mut n = v.cell.map(i32::from);
+                        n[a] += d;
+                        let Ok(n) = n.map(u16::try_from).into_iter().collect::<Result<Vec<u16>, _>>() else {
+                            return false;
+                        };
+                        let n = [n[0], n[1], n[2]];
+                        let centre = hollow.spec.cell_center(n.map(u32::from));
+                        let p: [f64; 3] =
+                            std::array::from_fn(|k| f64::from(centre[k] / hollow.spec.scale + hollow.spec.center[k]));
+                        !solid.contains(&n) && in_sphere_and_slab(p, cell)
+                    })
+                })
+            })
+            .count();
+        match fill {
+            FillMode::Winding => assert_eq!(walls, 0),
+            _ => assert!(walls > 100, "parity: only {walls} walls round the empty overlap"),
+        }
+    }
+}
