@@ -1,6 +1,15 @@
 //! Orientation for the winding fill: finds the model's closed parts, orients each consistently and gives
 //! each triangle its [`Role`] in the column count of [`crate::fill`].
 //!
+//! # As in the file, when every column agrees
+//!
+//! First the triangles are taken facing as they do in the file. When in every column their steps add up
+//! to zero and the winding number never drops below zero, these are the roles: no part can be inside out
+//! there (its inside would wind −1) except as a cavity wall within other material, which is what it is
+//! kept as anyway, a part with reversed triangles unbalances the columns through them, and an open sheet
+//! is closed as far as any column can tell. That costs one pass over the crossings, and it is the case
+//! for well-made models (every closed model of the corpus). Otherwise the parts are analysed:
+//!
 //! # Parts
 //!
 //! Corners are welded by their exact grid-space position (the positions the column test sees). A *sheet*
@@ -179,31 +188,51 @@ struct Parts {
 impl Parts {
     /// Finds the closed parts of `tris`.
     fn find(tris: &[GridTriangle]) -> Self {
-        // Every edge of every triangle with three distinct corners, keyed by a hash of its two ends (the
-        // sum of their hashes: the same whichever way it is walked).
-        let mut edges: Vec<(u64, u32)> = (0..tris.len() as u32)
-            .into_par_iter()
-            .flat_map_iter(|t| {
-                let keys = tris[t as usize].map(position_key);
-                let hashes = keys.map(position_hash);
-                (0..3u32)
-                    .filter(move |_| has_area(keys))
-                    .map(move |k| (mix(hashes[k as usize].wrapping_add(hashes[(k as usize + 1) % 3])), 3 * t + k))
-            })
-            .collect();
-        edges.par_sort_unstable();
+        // Every edge of every triangle, keyed by a hash of its two ends (the sum of their hashes: the same
+        // whichever way it is walked); the edges of triangles without three distinct corners get the key
+        // `u64::MAX` and are left out below.
+        let mut edges = vec![(0u64, 0u32); 3 * tris.len()];
+        edges.par_chunks_mut(3).zip(tris.par_iter()).enumerate().for_each(|(t, (out, tri))| {
+            let keys = tri.map(position_key);
+            let hashes = keys.map(position_hash);
+            for k in 0..3 {
+                let hash = if has_area(keys) { mix(hashes[k].wrapping_add(hashes[(k + 1) % 3])) } else { u64::MAX };
+                out[k] = (hash, (3 * t + k) as u32);
+            }
+        });
+        // Only the hash orders: corners with equal hashes are grouped by position below whatever their order.
+        edges.par_sort_unstable_by_key(|e| e.0);
+        // A run of two corners with the same hash is all but always a manifold edge: note the partners
+        // now and check them exactly below. Other runs are split into exact groups here (rare).
+        let mut partner = vec![NO_PART; 3 * tris.len()];
         let mut union = OrientingUnionFind::new(tris.len());
         // Border and non-manifold edges, as groups of corners walking the same edge.
         let mut unpaired: Vec<Vec<u32>> = Vec::new();
         for run in edges.chunk_by(|a, b| a.0 == b.0) {
-            for group in same_edge_groups(tris, run.iter().map(|e| e.1).collect()) {
-                if let [a, b] = group[..] {
-                    let (_, fa) = undirected(tris, a);
-                    let (_, fb) = undirected(tris, b);
-                    union.join(a / 3, b / 3, fa == fb);
-                } else {
-                    unpaired.push(group);
+            let run_has_area = |&&(_, c): &&(u64, u32)| has_area(tris[c as usize / 3].map(position_key));
+            if let [(hash, a), (_, b)] = *run
+                && hash != u64::MAX
+            {
+                (partner[a as usize], partner[b as usize]) = (b, a);
+                continue;
+            }
+            for group in same_edge_groups(tris, run.iter().filter(run_has_area).map(|e| e.1).collect()) {
+                match group[..] {
+                    [a, b] => join_across(tris, &mut union, a, b),
+                    _ => unpaired.push(group),
                 }
+            }
+        }
+        // In triangle order: partners are usually near each other in memory, the hash order is random.
+        for (a, &b) in partner.iter().enumerate() {
+            let a = a as u32;
+            if b == NO_PART || b < a {
+                continue;
+            }
+            if undirected(tris, a).0 == undirected(tris, b).0 {
+                join_across(tris, &mut union, a, b);
+            } else {
+                unpaired.extend([vec![a], vec![b]]);
             }
         }
         let sheets = Sheets::of(tris, union);
@@ -275,6 +304,11 @@ impl Parts {
     }
 }
 
+/// Joins the triangles of corners `a` and `b`, which walk the same manifold edge.
+fn join_across(tris: &[GridTriangle], union: &mut OrientingUnionFind, a: u32, b: u32) {
+    union.join(a / 3, b / 3, undirected(tris, a).1 == undirected(tris, b).1);
+}
+
 /// Whether a triangle's corners (as position keys) are three different points.
 fn has_area(keys: [[u64; 3]; 3]) -> bool {
     keys[0] != keys[1] && keys[1] != keys[2] && keys[2] != keys[0]
@@ -330,23 +364,31 @@ impl Sheets {
 /// Splits corners whose edges have the same hash into groups walking the same edge (almost always one
 /// group: a hash collision of different edges is all but impossible, but is handled exactly).
 fn same_edge_groups(tris: &[GridTriangle], mut corners: Vec<u32>) -> Vec<Vec<u32>> {
-    if let [a, b] = corners[..]
-        && undirected(tris, a).0 == undirected(tris, b).0
-    {
-        return vec![corners];
-    }
     corners.sort_by_key(|&c| (undirected(tris, c).0, c));
     corners.chunk_by(|&a, &b| undirected(tris, a).0 == undirected(tris, b).0).map(<[u32]>::to_vec).collect()
 }
 
 /// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
-/// model's column crossings when the caller has them; they are computed here only when a part facing
-/// inwards needs the nesting test.
+/// model's column crossings when the caller has them; otherwise `crossings` computes them.
 pub(crate) fn winding_roles(
     tris: &[GridTriangle],
     columns: Option<&Columns>,
     crossings: impl FnOnce() -> Columns,
 ) -> Vec<Role> {
+    let computed;
+    let columns = match columns {
+        Some(c) => c,
+        None => {
+            computed = crossings();
+            &computed
+        }
+    };
+    let as_in_file: Vec<Role> = tris.par_iter().map(|t| facing_role(t, false)).collect();
+    if consistent_as_in_file(columns, &as_in_file) {
+        eprintln!("PATH: as in file");
+        return as_in_file;
+    }
+    eprintln!("PATH: parts");
     let parts = Parts::find(tris);
     // Signed volume (×6) of each closed part with its sheets oriented as in the file.
     let mut volume = vec![0.0f64; parts.count];
@@ -362,26 +404,11 @@ pub(crate) fn winding_roles(
     let mut roles: Vec<Role> = tris
         .par_iter()
         .enumerate()
-        .map(|(t, tri)| {
-            if parts.of[t] == NO_PART {
-                return Role::Parity;
-            }
-            let xy = |v: DVec3| Coord { x: v.x, y: v.y };
-            let faces_up = orient2d(xy(tri[0]), xy(tri[1]), xy(tri[2])) > 0.0;
-            if faces_up ^ parts.reversed[t] { Role::Leaves } else { Role::Enters }
-        })
+        .map(|(t, tri)| if parts.of[t] == NO_PART { Role::Parity } else { facing_role(tri, parts.reversed[t]) })
         .collect();
     if !inward.contains(&true) {
         return roles;
     }
-    let computed;
-    let columns = match columns {
-        Some(c) => c,
-        None => {
-            computed = crossings();
-            &computed
-        }
-    };
     let exposed = exposed_parts(columns, &roles, &parts.of, &inward);
     for (t, role) in roles.iter_mut().enumerate() {
         if parts.of[t] != NO_PART && exposed[parts.of[t] as usize] {
@@ -389,6 +416,28 @@ pub(crate) fn winding_roles(
         }
     }
     roles
+}
+
+/// The winding role of a triangle with its corner order as in the file or `reversed`.
+fn facing_role(t: &GridTriangle, reversed: bool) -> Role {
+    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
+    let faces_up = orient2d(xy(t[0]), xy(t[1]), xy(t[2])) > 0.0;
+    if faces_up ^ reversed { Role::Leaves } else { Role::Enters }
+}
+
+/// Whether the triangles as they face in the file already wind consistently as far as any column can
+/// tell: in every column the steps add up to zero and the winding number never drops below zero.
+fn consistent_as_in_file(columns: &Columns, roles: &[Role]) -> bool {
+    (0..columns.len()).into_par_iter().all(|col| {
+        let mut winding = 0i32;
+        for c in columns.column(col) {
+            winding += roles[c.triangle as usize].step();
+            if winding < 0 {
+                return false;
+            }
+        }
+        winding == 0
+    })
 }
 
 /// Which parts facing inwards (`inward`) have a column crossing outside the material of the other parts
@@ -424,59 +473,77 @@ fn exposed_parts(columns: &Columns, roles: &[Role], part_of: &[u32], inward: &[b
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fill::crossings_by_rasterizing;
+    use crate::grid::GridSpec;
     use crate::shapes::{IndexedMesh, cuboid};
+
+    /// The tests' meshes are given in grid coordinates, inside a 4 × 4 × 4 grid.
+    const SPEC: GridSpec = GridSpec { dims: [4; 3], cell: [1.0; 3], origin: [0.0; 3], scale: 1.0, center: [0.0; 3] };
 
     fn grid_tris(mesh: &IndexedMesh) -> Vec<GridTriangle> {
         mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect()
     }
 
-    /// Roles of a mesh with no column crossings at hand (none are needed unless a part faces inwards).
-    fn roles(tris: &[GridTriangle]) -> Vec<Role> {
-        winding_roles(tris, None, || panic!("no nesting test expected"))
+    fn roles(mesh: &IndexedMesh) -> Vec<Role> {
+        let tris = grid_tris(mesh);
+        winding_roles(&tris, None, || crossings_by_rasterizing(&SPEC, &tris))
+    }
+
+    fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {
+        for t in mesh.triangles.iter_mut().step_by(every) {
+            t.swap(1, 2);
+        }
+        mesh
+    }
+
+    fn block() -> IndexedMesh {
+        cuboid([0.25; 3], [3.75; 3])
     }
 
     #[test]
     fn a_box_is_one_closed_part_and_its_bottom_enters() {
-        let tris = grid_tris(&cuboid([0.0; 3], [1.0; 3]));
-        let parts = Parts::find(&tris);
+        let parts = Parts::find(&grid_tris(&block()));
         assert_eq!((parts.count, parts.of.iter().all(|&p| p == 0)), (1, true));
-        let r = roles(&tris);
-        // The bottom (z = 0, normal −Z) enters, the top leaves, the sides are edge-on.
-        for (t, tri) in tris.iter().enumerate() {
-            if tri.iter().all(|v| v.z == 0.0) {
-                assert_eq!(r[t], Role::Enters);
-            } else if tri.iter().all(|v| v.z == 1.0) {
-                assert_eq!(r[t], Role::Leaves);
-            }
+        // The bottom (normal −Z) enters, the top leaves; the sides are edge-on (the last four triangles are
+        // the horizontal faces).
+        let r = roles(&block());
+        assert_eq!(r[8..], [Role::Enters, Role::Enters, Role::Leaves, Role::Leaves]);
+    }
+
+    #[test]
+    fn reversed_triangles_and_inside_out_parts_are_corrected() {
+        let good = roles(&block());
+        for every in [1, 3, 4] {
+            assert_eq!(roles(&reversed(block(), every))[8..], good[8..], "every {every}th triangle reversed");
         }
     }
 
     #[test]
-    fn reversed_triangles_are_corrected() {
-        // Only the horizontal faces (the last four triangles) cross columns; the sides are edge-on.
-        let good = roles(&grid_tris(&cuboid([0.0; 3], [1.0; 3])));
-        for step in [3, 4] {
-            let mut mixed = cuboid([0.0; 3], [1.0; 3]);
-            for t in mixed.triangles.iter_mut().step_by(step) {
-                t.swap(1, 2);
-            }
-            assert_eq!(roles(&grid_tris(&mixed))[8..], good[8..], "every {step}th triangle reversed");
-        }
+    fn a_cavity_facing_inwards_is_kept() {
+        let mut hollow = block();
+        let inner = reversed(cuboid([1.25; 3], [2.75; 3]), 1);
+        hollow.positions.extend(&inner.positions);
+        hollow.triangles.extend(inner.triangles.iter().map(|t| t.map(|i| i + 8)));
+        let r = roles(&hollow);
+        // The inner bottom leaves (the column leaves the solid into the cavity), the inner top enters.
+        assert_eq!(r[20..], [Role::Leaves, Role::Leaves, Role::Enters, Role::Enters]);
+        // Even when the outer box's winding has to be repaired.
+        let mut mixed = hollow.clone();
+        mixed.triangles[8].swap(1, 2);
+        assert_eq!(roles(&mixed)[20..], r[20..]);
     }
 
     #[test]
-    fn open_and_non_manifold_parts_count_by_parity() {
-        let mut open = cuboid([0.0; 3], [1.0; 3]);
+    fn open_and_non_manifold_sheets_count_by_parity() {
+        let mut open = block();
         open.triangles.pop();
-        assert!(roles(&grid_tris(&open)).iter().all(|&r| r == Role::Parity));
+        assert!(roles(&open).iter().all(|&r| r == Role::Parity));
         // Two boxes sharing one edge: two closed parts. A fin on a box's edge: the box stays closed.
         let mut two = cuboid([0.0; 3], [1.0; 3]);
         let other = cuboid([1.0; 3], [2.0; 3]);
-        let base = two.positions.len() as u32;
         two.positions.extend(&other.positions);
-        two.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
-        let parts = Parts::find(&grid_tris(&two));
-        assert_eq!(parts.count, 2);
+        two.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + 8)));
+        assert_eq!(Parts::find(&grid_tris(&two)).count, 2);
         let mut fin = cuboid([0.0; 3], [1.0; 3]);
         fin.positions.push([0.5, -0.5, 1.5]);
         fin.triangles.push([4, 5, 8]);
