@@ -385,10 +385,8 @@ pub(crate) fn winding_roles(
     };
     let as_in_file: Vec<Role> = tris.par_iter().map(|t| facing_role(t, false)).collect();
     if consistent_as_in_file(columns, &as_in_file) {
-        eprintln!("PATH: as in file");
         return as_in_file;
     }
-    eprintln!("PATH: parts");
     let parts = Parts::find(tris);
     // Signed volume (×6) of each closed part with its sheets oriented as in the file.
     let mut volume = vec![0.0f64; parts.count];
