@@ -3,10 +3,11 @@
 //!
 //! # The column count
 //!
-//! Every triangle has a [`Role`] (see [`crate::orient`], which orients the model's closed parts):
-//! a triangle of a closed, oriented part *enters* (+1) or *leaves* (−1) that part when a +Z column crosses
-//! it, by whether its outward side faces down or up; a triangle of a part that cannot be oriented (open,
-//! non-manifold) counts by *parity*. For a cell centre at height z_c, with the crossings at or below z_c:
+//! Every triangle has a [`Role`] (see [`crate::orient`], which orients the model's closed parts): a
+//! winding triangle (of a closed, oriented part — or any triangle, when the file's own facing already
+//! balances every column) *enters* (+1) or *leaves* (−1) when a +Z column crosses it, by whether its
+//! outward side faces down or up; a triangle of a sheet that cannot be closed (open, non-manifold) counts
+//! by *parity*. For a cell centre at height z_c, with the crossings at or below z_c:
 //!
 //! * W = the sum of the steps of the winding crossings (the winding number of the closed parts);
 //! * P = the number of parity crossings, modulo 2 — or 0 in a column with an odd number of parity
@@ -18,9 +19,10 @@
 //! inwards cancels its surroundings (W = 1 − 1 = 0, or P + W = 1 − 1 = 0 inside a parity solid), and
 //! where only parity parts cross a column the rule is the article's parity. With every role `Parity`
 //! (`FillMode::Parity`) it is exactly whole-model parity. The sums depend only on which crossings lie at
-//! or below z_c, not on the order of crossings at equal depth, and the column test is exact, so a closed
-//! part's steps add up to zero in every column: the count from below equals the count from above, which
-//! is what the reference ([`reference_fill`]) uses.
+//! or below z_c, not on the order of crossings at equal depth, and the column test is exact, so the
+//! winding steps add up to zero in every column (a closed part's always do; the file's facing is only used
+//! as it is when they do): the count from below equals the count from above, which is what the reference
+//! ([`reference_fill`]) uses.
 
 use std::sync::OnceLock;
 
