@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod cli;
 pub mod color;
 pub mod error;
+pub mod export;
 mod fill;
 pub mod geom;
 pub mod glb;

@@ -286,15 +286,15 @@ fn surface_colors(
             let i = i as usize;
             let c = spec.coords(i);
             let p = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-            let own = shell.triangles_of(i);
-            let tri = nearest_among(tris, p, own.iter().map(|&t| t as usize)).map(|(t, _)| t).or_else(|| {
-                // Shell triangles of the face neighbours (where the surface crossing a face lies), then of
-                // the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
-                (0..=8)
+            // The cell's own shell triangles and its face neighbours': a surface on a cell face (an exported
+            // voxel mesh), which the half-open shell gives to one side or the other by rounding, is nearest.
+            let around = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i, step)).chain([i]);
+            let candidates = around.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize));
+            let tri = nearest_among(tris, p, candidates).map(|(t, _)| t).or_else(|| {
+                // Shell triangles of the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
+                (1..=8)
                     .find_map(|r| {
-                        let steps: Box<dyn Iterator<Item = [i32; 3]>> =
-                            if r == 0 { Box::new(FACE_STEPS.into_iter()) } else { Box::new(cube_ring(r)) };
-                        let ring = steps.filter_map(|step| spec.offset(i, step));
+                        let ring = cube_ring(r).filter_map(|step| spec.offset(i, step));
                         let candidates = ring.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize));
                         nearest_among(tris, p, candidates).map(|(t, _)| t)
                     })

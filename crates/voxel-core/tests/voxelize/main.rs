@@ -5,4 +5,5 @@ mod common;
 mod corpus;
 mod errors;
 mod export;
+mod gltf_export;
 mod shapes;
