@@ -63,22 +63,22 @@ struct Builder {
 }
 
 impl Builder {
-    /// Appends `bytes` as a buffer view (4-byte aligned) and an accessor over it.
+    /// Makes the bytes appended to the buffer since `offset` a buffer view (padded to 4 bytes) and an
+    /// accessor over it.
     fn accessor(
         &mut self,
-        bytes: &[u8],
+        offset: usize,
         count: usize,
         component: json::accessor::ComponentType,
         kind: json::accessor::Type,
         target: json::buffer::Target,
         bounds: Option<([f32; 3], [f32; 3])>,
     ) -> json::Index<json::Accessor> {
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
+        let length = self.bin.len() - offset;
         self.bin.resize(self.bin.len().next_multiple_of(4), 0);
         let view = self.root.push(json::buffer::View {
             buffer: json::Index::new(0),
-            byte_length: USize64::from(bytes.len()),
+            byte_length: USize64::from(length),
             byte_offset: Some(USize64::from(offset)),
             byte_stride: None,
             extensions: None,
@@ -104,7 +104,11 @@ impl Builder {
 
     /// Appends VEC3 floats.
     fn vec3s(&mut self, values: &[[f32; 3]], bounds: bool) -> json::Index<json::Accessor> {
-        let bytes: Vec<u8> = values.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let offset = self.bin.len();
+        self.bin.reserve(values.len() * 12);
+        for v in values.iter().flatten() {
+            self.bin.extend_from_slice(&v.to_le_bytes());
+        }
         let bounds = bounds.then(|| {
             values.iter().fold(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]), |(lo, hi), p| {
                 (std::array::from_fn(|a| lo[a].min(p[a])), std::array::from_fn(|a| hi[a].max(p[a])))
@@ -112,24 +116,30 @@ impl Builder {
         });
         let (f32_, vec3, array) =
             (json::accessor::ComponentType::F32, json::accessor::Type::Vec3, json::buffer::Target::ArrayBuffer);
-        self.accessor(&bytes, values.len(), f32_, vec3, array, bounds)
+        self.accessor(offset, values.len(), f32_, vec3, array, bounds)
     }
 
     /// Appends triangle indices, as u16 when every index fits below u16's maximum (which glTF reserves).
     fn indices(&mut self, indices: &[u32], vertex_count: usize) -> json::Index<json::Accessor> {
-        let (component, bytes): (_, Vec<u8>) = if vertex_count < usize::from(u16::MAX) {
-            (json::accessor::ComponentType::U16, indices.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect())
-        } else {
-            (json::accessor::ComponentType::U32, indices.iter().flat_map(|i| i.to_le_bytes()).collect())
-        };
+        let narrow = vertex_count < usize::from(u16::MAX);
+        let offset = self.bin.len();
+        self.bin.reserve(indices.len() * if narrow { 2 } else { 4 });
+        for &i in indices {
+            if narrow {
+                self.bin.extend_from_slice(&(i as u16).to_le_bytes());
+            } else {
+                self.bin.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        let component = if narrow { json::accessor::ComponentType::U16 } else { json::accessor::ComponentType::U32 };
         let (scalar, element) = (json::accessor::Type::Scalar, json::buffer::Target::ElementArrayBuffer);
-        self.accessor(&bytes, indices.len(), component, scalar, element, None)
+        self.accessor(offset, indices.len(), component, scalar, element, None)
     }
 }
 
 /// The glTF document of `model`'s surface.
 fn document(model: &VoxelModel, options: &ExportOptions) -> Result<Document> {
-    let surface = surface(model)?;
+    let surface = surface(model);
     let vertices = Vertices::of(model, &surface);
     let mut b = Builder {
         root: json::Root {

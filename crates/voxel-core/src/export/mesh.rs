@@ -1,31 +1,13 @@
 //! The visible surface of a voxel model as rectangles: the faces between a filled and an empty cell (never
 //! the faces between two filled cells), merged greedily into larger rectangles where neighbouring faces
-//! share a colour (block-mesh's `greedy_quads`, Lysenko's greedy meshing).
+//! share a colour.
+//!
+//! The work follows the faces, not the grid: the exposed faces are found from the voxel list, sorted per
+//! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
+//! rectangle of the row before when it spans the same columns in the same colour.
 
-use block_mesh::ndshape::{RuntimeShape, Shape};
-use block_mesh::{GreedyQuadsBuffer, MergeVoxel, RIGHT_HANDED_Y_UP_CONFIG, VoxelVisibility, greedy_quads};
-
-use crate::error::{Result, VoxelError};
+use crate::grid::BitGrid;
 use crate::voxelize::VoxelModel;
-
-/// A cell as the mesher sees it: empty, or filled with an sRGB colour. Faces merge only within one colour,
-/// so every rectangle is a single colour (vertex colours interpolated over it stay exact).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Cell(Option<[u8; 3]>);
-
-impl block_mesh::Voxel for Cell {
-    fn get_visibility(&self) -> VoxelVisibility {
-        if self.0.is_some() { VoxelVisibility::Opaque } else { VoxelVisibility::Empty }
-    }
-}
-
-impl MergeVoxel for Cell {
-    type MergeValue = Option<[u8; 3]>;
-
-    fn merge_value(&self) -> Self::MergeValue {
-        self.0
-    }
-}
 
 /// One rectangle of the surface, all of one colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,51 +39,156 @@ pub struct Surface {
     pub faces: usize,
 }
 
-/// Orders a rectangle's corners (block-mesh's `[min u min v, max u min v, min u max v, max u max v]`)
-/// counter-clockwise around `normal`.
-fn counter_clockwise(c: [[u32; 3]; 4], normal: [i32; 3]) -> [[u32; 3]; 4] {
-    let loop_ = [c[0], c[1], c[3], c[2]];
-    let d = |a: [u32; 3], b: [u32; 3]| std::array::from_fn::<i64, 3, _>(|k| i64::from(b[k]) - i64::from(a[k]));
-    let (u, v) = (d(loop_[0], loop_[1]), d(loop_[0], loop_[3]));
-    let cross = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-    let facing: i64 = (0..3).map(|k| cross[k] * i64::from(normal[k])).sum();
-    if facing > 0 { loop_ } else { [c[0], c[2], c[3], c[1]] }
+/// A face direction: the normal's axis and sign. Within its plane a face is addressed by the column `u`
+/// (axis + 1) and the row `v` (axis + 2), so that u × v points along +axis.
+#[derive(Clone, Copy, Debug)]
+struct Direction {
+    axis: usize,
+    positive: bool,
+}
+
+impl Direction {
+    const ALL: [Direction; 6] = [
+        Direction { axis: 0, positive: false },
+        Direction { axis: 0, positive: true },
+        Direction { axis: 1, positive: false },
+        Direction { axis: 1, positive: true },
+        Direction { axis: 2, positive: false },
+        Direction { axis: 2, positive: true },
+    ];
+
+    /// The grid point at `plane` along the axis, column `u` and row `v`.
+    fn point(self, plane: u32, u: u32, v: u32) -> [u32; 3] {
+        let mut p = [0; 3];
+        p[self.axis] = plane;
+        p[(self.axis + 1) % 3] = u;
+        p[(self.axis + 2) % 3] = v;
+        p
+    }
+}
+
+/// A run of faces of one colour along a row: columns `u0..u1`, and the rectangle it belongs to.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    u0: u32,
+    u1: u32,
+    color: [u8; 3],
+    rect: usize,
+}
+
+/// A merged rectangle within a plane: columns `u0..u1`, rows `v0..v1`.
+#[derive(Clone, Copy, Debug)]
+struct Rect {
+    plane: u32,
+    u0: u32,
+    u1: u32,
+    v0: u32,
+    v1: u32,
+    color: [u8; 3],
+}
+
+/// Sort key of a face: plane, then row, then column (each below 2^17 since grids are at most 65 535 cells
+/// a side).
+fn face_key(plane: u32, u: u32, v: u32) -> u64 {
+    u64::from(plane) << 40 | u64::from(v) << 20 | u64::from(u)
+}
+
+/// Merges the faces of one direction, sorted by [`face_key`], into rectangles.
+fn merge(faces: &[(u64, [u8; 3])]) -> Vec<Rect> {
+    let mut rects: Vec<Rect> = Vec::new();
+    // The runs of the row before (by ascending u0) and of the current row, with the row they lie in.
+    let (mut previous, mut current): (Vec<Run>, Vec<Run>) = (Vec::new(), Vec::new());
+    let mut row = None;
+    let mut k = 0;
+    while k < faces.len() {
+        let (key, color) = faces[k];
+        let (plane, v, u0) = ((key >> 40) as u32, (key >> 20 & 0xF_FFFF) as u32, (key & 0xF_FFFF) as u32);
+        let mut u1 = u0 + 1;
+        k += 1;
+        while k < faces.len() && faces[k].0 == face_key(plane, u1, v) && faces[k].1 == color {
+            u1 += 1;
+            k += 1;
+        }
+        if row != Some((plane, v)) {
+            // A new row: the current one becomes the row before, if it is adjacent.
+            let adjacent = row.is_some_and(|(p, r)| p == plane && r + 1 == v);
+            std::mem::swap(&mut previous, &mut current);
+            current.clear();
+            if !adjacent {
+                previous.clear();
+            }
+            row = Some((plane, v));
+        }
+        // The run below with the same columns and colour, if any, carries its rectangle up one row.
+        let below =
+            previous.iter().position(|r| r.u0 == u0).filter(|&i| previous[i].u1 == u1 && previous[i].color == color);
+        let rect = match below {
+            Some(i) => {
+                let rect = previous.swap_remove(i).rect;
+                rects[rect].v1 = v + 1;
+                rect
+            }
+            None => {
+                rects.push(Rect { plane, u0, u1, v0: v, v1: v + 1, color });
+                rects.len() - 1
+            }
+        };
+        current.push(Run { u0, u1, color, rect });
+    }
+    rects
 }
 
 /// The surface of `model`: its visible faces merged into single-coloured rectangles.
 ///
 /// The faces are those between a voxel of the model and a cell without one, so a hollowed model (visible
 /// voxels only) also gets the walls of its emptied inside; mesh the solid model for the outside alone.
-pub fn surface(model: &VoxelModel) -> Result<Surface> {
-    // One empty cell of padding all round: block-mesh reads each cell's neighbours without bounds checks.
-    let padded = model.spec.dims.map(|d| u64::from(d) + 2);
-    let size = padded.iter().product::<u64>();
-    if size > u64::from(u32::MAX) {
-        let [nx, ny, nz] = model.spec.dims;
-        return Err(VoxelError::Parameter(format!("grid {nx}x{ny}x{nz} is too large to mesh (over 2^32 cells)")));
-    }
-    let shape = RuntimeShape::<u32, 3>::new(padded.map(|d| d as u32));
-    let mut cells = vec![Cell(None); size as usize];
+/// Only voxels flagged [`Voxel::visible`](crate::Voxel::visible) are looked at: the others have no empty
+/// face neighbour.
+pub fn surface(model: &VoxelModel) -> Surface {
+    let spec = &model.spec;
+    let mut filled = BitGrid::new(spec.cell_count());
     for v in &model.voxels {
-        let c = v.cell.map(|c| u32::from(c) + 1);
-        cells[shape.linearize(c) as usize] = Cell(Some([v.color[0], v.color[1], v.color[2]]));
+        filled.set(spec.index(u32::from(v.cell[0]), u32::from(v.cell[1]), u32::from(v.cell[2])));
     }
-    let faces = &RIGHT_HANDED_Y_UP_CONFIG.faces;
-    let mut buffer = GreedyQuadsBuffer::new(cells.len());
-    greedy_quads(&cells, &shape, [0; 3], padded.map(|d| d as u32 - 1), faces, &mut buffer);
-    let mut out = Surface::default();
-    for (group, face) in buffer.quads.groups.iter().zip(faces) {
-        let normal = face.signed_normal().to_array();
-        for quad in group {
-            let Cell(Some(color)) = cells[shape.linearize(quad.minimum) as usize] else {
-                unreachable!("block-mesh starts every quad on a filled cell");
+    let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
+    let mut faces: [Vec<(u64, [u8; 3])>; 6] = Default::default();
+    // A voxel not flagged visible has six filled face neighbours: it has no face to find.
+    for v in model.voxels.iter().filter(|v| v.visible) {
+        let cell = v.cell.map(u32::from);
+        let i = spec.index(cell[0], cell[1], cell[2]);
+        let color = [v.color[0], v.color[1], v.color[2]];
+        for (d, dir) in Direction::ALL.into_iter().enumerate() {
+            let a = dir.axis;
+            let covered = if dir.positive {
+                cell[a] + 1 < spec.dims[a] && filled.get(i + strides[a])
+            } else {
+                cell[a] > 0 && filled.get(i - strides[a])
             };
-            let corners = face.quad_corners(quad).map(|c| c.to_array().map(|k| k - 1));
-            out.faces += (quad.width * quad.height) as usize;
-            out.quads.push(Quad { corners: counter_clockwise(corners, normal), normal, color });
+            if covered {
+                continue;
+            }
+            let plane = cell[dir.axis] + u32::from(dir.positive);
+            faces[d].push((face_key(plane, cell[(dir.axis + 1) % 3], cell[(dir.axis + 2) % 3]), color));
         }
     }
-    Ok(out)
+    let mut out = Surface { quads: Vec::new(), faces: faces.iter().map(Vec::len).sum() };
+    for (dir, mut faces) in Direction::ALL.into_iter().zip(faces) {
+        faces.sort_unstable_by_key(|f| f.0);
+        let mut normal = [0; 3];
+        normal[dir.axis] = if dir.positive { 1 } else { -1 };
+        for r in merge(&faces) {
+            let p = |u, v| dir.point(r.plane, u, v);
+            // u × v points along +axis: this loop winds counter-clockwise seen from that side.
+            let ccw_from_positive = [p(r.u0, r.v0), p(r.u1, r.v0), p(r.u1, r.v1), p(r.u0, r.v1)];
+            let corners = if dir.positive {
+                ccw_from_positive
+            } else {
+                [p(r.u0, r.v0), p(r.u0, r.v1), p(r.u1, r.v1), p(r.u1, r.v0)]
+            };
+            out.quads.push(Quad { corners, normal, color: r.color });
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -169,7 +256,7 @@ pub(crate) mod tests {
     /// Checks that the rectangles cover every visible face exactly once, in its cell's colour, wound
     /// counter-clockwise seen from outside; returns the surface.
     fn checked_surface(model: &VoxelModel) -> Surface {
-        let s = surface(model).unwrap();
+        let s = surface(model);
         let expected = faces_by_brute_force(model);
         let mut covered = HashMap::new();
         for q in &s.quads {

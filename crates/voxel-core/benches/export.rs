@@ -1,0 +1,89 @@
+//! `cargo bench -p voxel-core --bench export`: the glTF export of khronos-boxvertexcolors at R = 64 and
+//! khronos-duck at R = 128 (default voxelization) from ../shared/models (or `VOXEL_ART_MODELS`): faces,
+//! rectangles after greedy merging, triangles before and after, bytes, and the median export time (and of
+//! the greedy meshing alone) of 15 runs, as a
+//! Markdown table. The Duck's export has a budget of 50 ms.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use voxel_core::export::ExportOptions;
+use voxel_core::export::gltf::to_glb;
+use voxel_core::export::mesh::surface;
+use voxel_core::{GridSize, VoxelizeOptions, load_file, voxelize};
+
+const RUNS: usize = 15;
+const DUCK_BUDGET_MS: f64 = 50.0;
+
+fn models_dir() -> PathBuf {
+    std::env::var_os("VOXEL_ART_MODELS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
+}
+
+/// The median of `times`.
+fn median(mut times: Vec<f64>) -> f64 {
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// Nanoseconds this thread has run on a CPU (Linux's schedstat), or 0 where unavailable. The export is
+/// single-threaded, so this is its time on an idle core whatever else loads the machine.
+fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
+/// Median wall and CPU milliseconds of `RUNS` calls of `f`.
+fn time<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
+    let (mut wall, mut cpu) = (Vec::with_capacity(RUNS), Vec::with_capacity(RUNS));
+    for _ in 0..RUNS {
+        let (t, c) = (Instant::now(), thread_cpu_ns());
+        std::hint::black_box(f());
+        wall.push(t.elapsed().as_secs_f64() * 1e3);
+        cpu.push((thread_cpu_ns() - c) as f64 / 1e6);
+    }
+    (median(wall), median(cpu))
+}
+
+fn main() {
+    let dir = models_dir();
+    println!(
+        "| model | R | grid | voxels | faces | triangles before | rectangles | triangles after | .glb bytes | export ms: wall (CPU) | of which greedy ms |"
+    );
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for (file, r) in [("khronos-boxvertexcolors.glb", 64), ("khronos-duck.glb", 128)] {
+        let soup = match load_file(&dir.join(file)) {
+            Ok(s) => s,
+            Err(e) => {
+                println!("| {file} | {r} | error: {e} (set VOXEL_ART_MODELS) |");
+                continue;
+            }
+        };
+        let model = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() })
+            .expect("voxelize");
+        let options = ExportOptions { name: file.trim_end_matches(".glb").into() };
+        let (wall, cpu) = time(|| to_glb(&model, &options).expect("export"));
+        let (greedy_wall, greedy_cpu) = time(|| surface(&model));
+        let (bytes, s) = to_glb(&model, &options).expect("export");
+        assert_eq!(bytes.len(), s.bytes);
+        let [nx, ny, nz] = model.spec.dims;
+        println!(
+            "| {file} | {r} | {nx}×{ny}×{nz} | {} | {} | {} | {} | {} | {} | {wall:.1} ({cpu:.1}) | {greedy_wall:.1} ({greedy_cpu:.1}) |",
+            model.voxels.len(),
+            s.faces,
+            2 * s.faces,
+            s.quads,
+            2 * s.quads,
+            s.bytes
+        );
+        if file == "khronos-duck.glb" {
+            let verdict = if wall <= DUCK_BUDGET_MS { "within" } else { "OVER" };
+            println!(
+                "\nDuck R=128 export: {wall:.1} ms wall ({cpu:.1} ms on the CPU), {verdict} the {DUCK_BUDGET_MS} ms budget"
+            );
+        }
+    }
+}
