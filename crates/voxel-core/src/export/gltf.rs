@@ -267,11 +267,13 @@ mod tests {
     use super::*;
     use crate::export::mesh::tests::model_of;
 
-    /// A plate of `n` × `n` cells in a checkerboard of two colours (nothing merges on its faces).
-    fn checkerboard(n: u16) -> VoxelModel {
-        let cells = (0..n)
-            .flat_map(|x| (0..n).map(move |z| ([x, 0, z], if (x + z) % 2 == 0 { [255, 0, 0] } else { [0, 0, 0] })));
-        model_of([u32::from(n), 1, u32::from(n)], cells)
+    /// The bottom layer of [`model_of`]`(k)`'s grid, 8k × 8k cells, in a checkerboard of two colours (nothing
+    /// merges on its faces).
+    fn checkerboard(k: u16) -> VoxelModel {
+        let n = 8 * k;
+        let cells =
+            (0..n).flat_map(|x| (0..n).map(move |z| ([x, 0, z], if (x + z) % 2 == 0 { [255, 0, 0] } else { [0; 3] })));
+        model_of(k, cells)
     }
 
     /// Reads a VEC3 float accessor back.
@@ -287,7 +289,7 @@ mod tests {
 
     #[test]
     fn the_glb_passes_validation_with_exact_bounds_colours_and_the_inverse_normalization() {
-        let m = model_of([4, 2, 3], [([0, 0, 0], [255, 128, 0]), ([3, 1, 2], [0, 0, 0]), ([1, 0, 0], [255, 128, 0])]);
+        let m = model_of(1, [([0, 0, 0], [255, 128, 0]), ([3, 1, 2], [0, 0, 0]), ([1, 0, 0], [255, 128, 0])]);
         let (bytes, stats) = to_glb(&m, &ExportOptions { name: "thing".into() }).unwrap();
         assert_eq!(stats, MeshStats { faces: 16, quads: 12, vertices: 48, bytes: bytes.len() });
         let gltf = gltf::Gltf::from_slice(&bytes).expect("a valid glTF");
@@ -300,11 +302,11 @@ mod tests {
         let bound = |f: fn(f32, f32) -> f32| -> [f32; 3] {
             std::array::from_fn(|a| positions.iter().map(|p| p[a]).reduce(f).unwrap())
         };
-        // Cells are 0.5 wide from the origin (-1, -0.5, -0.75): the model spans cells (0..4, 0..2, 0..3).
-        assert_eq!(bound(f32::min), [-1.0, -0.5, -0.75]);
-        assert_eq!(bound(f32::max), [1.0, 0.5, 0.75]);
-        assert_eq!(position.min().unwrap(), serde_json::json!([-1.0, -0.5, -0.75]));
-        assert_eq!(position.max().unwrap(), serde_json::json!([1.0, 0.5, 0.75]));
+        // Cells are 0.5 wide from the origin (-2, -1, -2): the model spans cells (0..4, 0..2, 0..3).
+        assert_eq!(bound(f32::min), [-2.0, -1.0, -2.0]);
+        assert_eq!(bound(f32::max), [0.0, 0.0, -0.5]);
+        assert_eq!(position.min().unwrap(), serde_json::json!([-2.0, -1.0, -2.0]));
+        assert_eq!(position.max().unwrap(), serde_json::json!([0.0, 0.0, -0.5]));
         let colors = read_vec3s(&gltf, &prim.get(&gltf::Semantic::Colors(0)).expect("COLOR_0"));
         let orange = [1.0, srgb_to_linear(128), 0.0];
         assert_eq!(colors.iter().filter(|&&c| c == orange).count(), 6 * 4, "two orange cells merge into 6 rectangles");
@@ -322,23 +324,24 @@ mod tests {
 
     #[test]
     fn many_vertices_take_u32_indices_and_import_back_where_the_original_sat() {
-        let m = checkerboard(130);
+        let m = checkerboard(17);
         let (bytes, stats) = to_glb(&m, &ExportOptions::default()).unwrap();
-        // Top and bottom never merge; the sides of each row of 130 alternate colours too.
-        assert_eq!(stats.quads, 2 * 130 * 130 + 4 * 130);
+        // Top and bottom never merge; the sides of each row of 136 alternate colours too.
+        assert_eq!(stats.quads, 2 * 136 * 136 + 4 * 136);
         let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
         let prim = gltf.meshes().next().unwrap().primitives().next().unwrap();
         assert_eq!(prim.indices().unwrap().data_type(), gltf::accessor::DataType::U32);
         let soup = crate::import::load_slice(&bytes, None).unwrap();
         assert_eq!(soup.triangle_count(), 2 * stats.quads);
-        // World = normalized / scale + centre: the plate spans 65 × 0.5 / 2 = 16.25 either side of x = 10.
+        // World = normalized / 2 + (10, 0, -4): the plate's 136 cells span ±34 normalized, ±17 in the world;
+        // its layer is the grid's bottom, -17 to -16.5 normalized.
         let (lo, hi) = soup.bounds().unwrap();
-        assert_eq!((lo, hi), ([10.0 - 16.25, -0.125, -4.0 - 16.25], [10.0 + 16.25, 0.125, -4.0 + 16.25]));
+        assert_eq!((lo, hi), ([10.0 - 17.0, -8.5, -4.0 - 17.0], [10.0 + 17.0, -8.25, -4.0 + 17.0]));
     }
 
     #[test]
     fn gltf_and_bin_files_hold_the_same_mesh_as_the_glb() {
-        let m = checkerboard(3);
+        let m = checkerboard(1);
         let dir = std::env::temp_dir().join(format!("voxel-core-gltf-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("a plate.gltf");
@@ -355,7 +358,7 @@ mod tests {
 
     #[test]
     fn an_empty_model_is_a_valid_file_with_no_mesh() {
-        let (bytes, stats) = to_glb(&model_of([2, 2, 2], []), &ExportOptions::default()).unwrap();
+        let (bytes, stats) = to_glb(&model_of(1, []), &ExportOptions::default()).unwrap();
         assert_eq!((stats.faces, stats.quads), (0, 0));
         let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
         assert_eq!((gltf.meshes().count(), gltf.nodes().count(), gltf.buffers().count()), (0, 1, 0));

@@ -199,15 +199,15 @@ pub(crate) mod tests {
     use crate::grid::GridSpec;
     use crate::voxelize::Voxel;
 
-    /// A model of `dims` cells 0.5 wide with the given coloured cells.
-    pub(crate) fn model_of(dims: [u32; 3], cells: impl IntoIterator<Item = ([u16; 3], [u8; 3])>) -> VoxelModel {
-        let spec = GridSpec {
-            dims,
-            cell: [0.5; 3],
-            origin: dims.map(|d| -0.25 * d as f32),
-            scale: 2.0,
-            center: [10.0, 0.0, -4.0],
-        };
+    /// A model on a grid of 8k × 4k × 8k cells 0.5 wide with the given coloured cells. The grid is fitted
+    /// to a box of 2k × k × 2k centred on (10, 0, -4), whose diagonal (3k) is scaled to 6k: the normalization
+    /// scale is exactly 2 and the grid's origin (-2k, -k, -2k).
+    pub(crate) fn model_of(k: u16, cells: impl IntoIterator<Item = ([u16; 3], [u8; 3])>) -> VoxelModel {
+        let k = f32::from(k);
+        let mut soup = crate::TriangleSoup::default();
+        let (lo, hi) = ([10.0 - k, -0.5 * k, -4.0 - k], [10.0 + k, 0.5 * k, -4.0 + k]);
+        soup.add_mesh(&crate::shapes::cuboid(lo, hi), [1.0; 4], "box");
+        let spec = GridSpec::fit(&soup, 6.0 * k, crate::GridSize::Cell(0.5), 1.0, crate::DEFAULT_MAX_CELLS).unwrap();
         let voxels = cells
             .into_iter()
             .map(|(cell, c)| Voxel { cell, color: [c[0], c[1], c[2], 255], part: 0, visible: true })
@@ -276,7 +276,7 @@ pub(crate) mod tests {
 
     #[test]
     fn one_voxel_is_six_unit_squares_facing_out() {
-        let m = model_of([3, 3, 3], [([1, 1, 1], [9, 8, 7])]);
+        let m = model_of(1, [([1, 1, 1], [9, 8, 7])]);
         let s = checked_surface(&m);
         assert_eq!((s.faces, s.quads.len()), (6, 6));
         let normals: HashSet<[i32; 3]> = s.quads.iter().map(|q| q.normal).collect();
@@ -286,7 +286,7 @@ pub(crate) mod tests {
     #[test]
     fn a_solid_block_has_no_inner_faces_and_merges_into_six_rectangles() {
         let block = (0..4u16).flat_map(|x| (0..3u16).flat_map(move |y| (0..2u16).map(move |z| ([x, y, z], [1, 2, 3]))));
-        let s = checked_surface(&model_of([4, 3, 2], block));
+        let s = checked_surface(&model_of(1, block));
         assert_eq!(s.faces, 2 * (4 * 3 + 3 * 2 + 4 * 2));
         assert_eq!(s.quads.len(), 6);
     }
@@ -294,10 +294,10 @@ pub(crate) mod tests {
     #[test]
     fn faces_merge_only_within_one_colour() {
         let two = [([0, 0, 0], [255, 0, 0]), ([1, 0, 0], [0, 0, 255])];
-        let s = checked_surface(&model_of([2, 1, 1], two));
+        let s = checked_surface(&model_of(1, two));
         assert_eq!((s.faces, s.quads.len()), (10, 10));
         let same = [([0, 0, 0], [255, 0, 0]), ([1, 0, 0], [255, 0, 0])];
-        let s = checked_surface(&model_of([2, 1, 1], same));
+        let s = checked_surface(&model_of(1, same));
         assert_eq!((s.faces, s.quads.len()), (10, 6));
     }
 

@@ -109,3 +109,45 @@ pub fn write_vox_and_glb(model: &VoxelModel, dir: &Path, options: &ExportOptions
     let glb_stats = gltf::write_glb(model, &glb, options)?;
     Ok(Saved { vox: (vox, vox_summary), glb: (glb, glb_stats) })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::export::mesh::tests::model_of;
+
+    #[test]
+    fn both_files_are_named_after_the_model_and_grid_in_a_new_folder() {
+        let m = model_of(1, [([0, 0, 0], [255, 0, 0]), ([1, 0, 0], [0, 255, 0])]);
+        let root = std::env::temp_dir().join(format!("voxel-core-save-{}", std::process::id()));
+        let dir = root.join("exports");
+        let saved = write_vox_and_glb(&m, &dir, &ExportOptions { name: "duck".into() }).unwrap();
+        assert_eq!(saved.vox.0, dir.join("duck-8x4x8.vox"));
+        assert_eq!(saved.glb.0, dir.join("duck-8x4x8.glb"));
+        assert_eq!((saved.vox.1.voxels, saved.vox.1.colors), (2, 2));
+        assert_eq!((saved.glb.1.faces, saved.glb.1.quads), (10, 10));
+        assert_eq!(std::fs::metadata(&saved.glb.0).unwrap().len() as usize, saved.glb.1.bytes);
+        let back = crate::import::load_file(&saved.glb.0).unwrap();
+        assert_eq!(back.triangle_count(), 20);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn an_unwritable_folder_is_an_error_naming_it() {
+        let file = std::env::temp_dir().join(format!("voxel-core-not-a-folder-{}", std::process::id()));
+        std::fs::write(&file, b"x").unwrap();
+        let dir = file.join("exports");
+        let err = write_vox_and_glb(&model_of(1, []), &dir, &ExportOptions::default()).unwrap_err();
+        std::fs::remove_file(&file).unwrap();
+        assert!(matches!(&err, VoxelError::Export { path, .. } if *path == dir), "{err}");
+        assert!(err.to_string().starts_with(&format!("cannot write {}: ", dir.display())), "{err}");
+    }
+
+    #[test]
+    fn formats_follow_the_extension_case_insensitively_with_vox_otherwise() {
+        assert_eq!(Format::of_path(Path::new("a/b.GLB")), Format::Glb);
+        assert_eq!(Format::of_path(Path::new("b.gltf")), Format::Gltf);
+        assert_eq!(Format::of_path(Path::new("b.vox")), Format::Vox);
+        assert_eq!(Format::of_path(Path::new("b")), Format::Vox);
+        assert_eq!(Format::Gltf.extension(), "gltf");
+    }
+}
