@@ -138,7 +138,7 @@ impl Builder {
 }
 
 /// The glTF document of `model`'s surface.
-fn document(model: &VoxelModel, options: &ExportOptions) -> Result<Document> {
+fn document(model: &VoxelModel, options: &ExportOptions) -> Document {
     let surface = surface(model);
     let vertices = Vertices::of(model, &surface);
     let mut b = Builder {
@@ -208,12 +208,12 @@ fn document(model: &VoxelModel, options: &ExportOptions) -> Result<Document> {
     b.root.scene = Some(scene);
     let stats =
         MeshStats { faces: surface.faces, quads: surface.quads.len(), vertices: vertices.positions.len(), bytes: 0 };
-    Ok(Document { root: b.root, bin: b.bin, stats })
+    Document { root: b.root, bin: b.bin, stats }
 }
 
 /// Encodes `model` as a binary glTF (.glb) in memory, with what it holds.
 pub fn to_glb(model: &VoxelModel, options: &ExportOptions) -> Result<(Vec<u8>, MeshStats)> {
-    let Document { root, bin, mut stats } = document(model, options)?;
+    let Document { root, bin, mut stats } = document(model, options);
     let failed = |e: &dyn std::fmt::Display| VoxelError::Parameter(format!("cannot encode the glTF: {e}"));
     let json = root.to_vec().map_err(|e| failed(&e))?;
     let length = 12 + 8 + json.len().next_multiple_of(4) + if bin.is_empty() { 0 } else { 8 + bin.len() };
@@ -238,7 +238,7 @@ pub fn write_glb(model: &VoxelModel, path: &Path, options: &ExportOptions) -> Re
 /// Writes `model` as a .gltf JSON file and, beside it, a .bin of the same stem that the JSON refers to.
 /// `bytes` in the result counts both files.
 pub fn write_gltf(model: &VoxelModel, path: &Path, options: &ExportOptions) -> Result<MeshStats> {
-    let Document { mut root, bin, mut stats } = document(model, options)?;
+    let Document { mut root, bin, mut stats } = document(model, options);
     let bin_path = path.with_extension("bin");
     let export_error = |path: &Path, reason: String| VoxelError::Export { path: path.to_owned(), reason };
     if let Some(buffer) = root.buffers.first_mut() {
