@@ -1,0 +1,454 @@
+//! Animated models: a glTF's node tree, skins, morph targets and clips, posed at any time of a clip into the
+//! world-space [`TriangleSoup`] the voxelizer reads.
+//!
+//! A pose is, in the glTF order: the clip's channels set node translations, rotations, scales and morph
+//! weights; node transforms compose down the tree; each primitive adds its weighted morph-target deltas to
+//! its base positions; a skinned primitive is then moved by linear-blend skinning (joint matrix = the joint's
+//! global transform × its inverse bind matrix; the skinned node's own transform is ignored, as the
+//! specification says), any other one by its node's global transform. Colours, UVs, parts and materials stay
+//! those of the static import, so colours follow the surface.
+//!
+//! Built by [`crate::import::load_animated_file`]; [`AnimatedModel::pose_into`] reuses its buffers, so
+//! posing allocates nothing after the first frame.
+
+mod sampler;
+
+use glam::{Mat4, Quat, Vec3};
+
+pub use sampler::{Interpolation, Sampler};
+
+use crate::error::{Result, VoxelError};
+use crate::soup::TriangleSoup;
+
+/// An axis-aligned box (min, max), as [`TriangleSoup::bounds`] returns it.
+pub type Bounds = ([f32; 3], [f32; 3]);
+
+/// Poses per second sampled (besides every keyframe time) when fitting a grid to a clip.
+pub const BOUNDS_SAMPLES_PER_SECOND: f32 = 30.0;
+
+/// What a caller needs to know about a clip.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClipInfo {
+    /// The glTF animation's name (`animation <index>` when it has none).
+    pub name: String,
+    /// The last keyframe time in seconds; the clip loops over `0..duration`.
+    pub duration: f32,
+    /// The number of channels (animated node properties).
+    pub channels: usize,
+}
+
+/// The node property a channel animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// Translation (3 values).
+    Translation,
+    /// Rotation quaternion x, y, z, w (4 values).
+    Rotation,
+    /// Scale (3 values).
+    Scale,
+    /// Morph-target weights (one per target of the node's mesh).
+    Weights,
+}
+
+/// One animated property of one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    /// The node index.
+    pub node: usize,
+    /// The property.
+    pub target: Target,
+    /// Its keyframes.
+    pub sampler: Sampler,
+}
+
+/// A clip: named channels played together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// Name, duration, channel count.
+    pub info: ClipInfo,
+    /// The channels.
+    pub channels: Vec<Channel>,
+}
+
+/// A node's local transform as translation, rotation and scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    /// Translation.
+    pub translation: Vec3,
+    /// Rotation.
+    pub rotation: Quat,
+    /// Scale.
+    pub scale: Vec3,
+}
+
+impl Trs {
+    /// The local matrix T · R · S.
+    fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// A node of the tree, at rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    /// The parent node, `None` for a root.
+    pub parent: Option<usize>,
+    /// The rest transform.
+    pub rest: Trs,
+    /// A rest matrix that replaces `rest` (glTF `matrix` nodes, which channels may not target).
+    pub matrix: Option<Mat4>,
+    /// Default morph weights: the node's `weights`, else its mesh's, else zeros (one per target).
+    pub weights: Vec<f32>,
+    /// The skin (index into the skins) that deforms the node's mesh.
+    pub skin: Option<usize>,
+}
+
+/// A skin: joint nodes and their inverse bind matrices (identity when the file gives none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    /// Joint node indices.
+    pub joints: Vec<usize>,
+    /// One inverse bind matrix per joint.
+    pub inverse_bind: Vec<Mat4>,
+}
+
+/// Per-vertex skin influences: `per_vertex` (joint, weight) pairs per vertex. Weights are normalized when
+/// posing; a vertex whose weights are all zero is not skinned and follows its node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Influences {
+    /// Influences per vertex (4, or 8 with JOINTS_1/WEIGHTS_1).
+    pub per_vertex: usize,
+    /// Indices into the skin's joints.
+    pub joints: Vec<u16>,
+    /// Weights.
+    pub weights: Vec<f32>,
+}
+
+/// A mesh primitive in mesh space with what deforms it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    /// Base positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex index of every triangle corner, in the order the soup holds the corners.
+    pub corners: Vec<u32>,
+    /// POSITION deltas per morph target.
+    pub targets: Vec<Vec<Vec3>>,
+    /// Joints and weights, when the primitive has JOINTS_0/WEIGHTS_0.
+    pub influences: Option<Influences>,
+}
+
+/// One part of the soup: a primitive placed by a node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Instance {
+    /// The node.
+    pub node: usize,
+    /// Index into the primitives.
+    pub primitive: usize,
+    /// The soup vertex of the primitive's first corner.
+    pub first_vertex: usize,
+}
+
+/// Buffers reused from pose to pose.
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    local: Vec<Trs>,
+    weights: Vec<Vec<f32>>,
+    global: Vec<Mat4>,
+    joints: Vec<Mat4>,
+    positions: Vec<Vec3>,
+    value: Vec<f32>,
+}
+
+/// A model with its animation data, posed on demand. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct AnimatedModel {
+    rest: TriangleSoup,
+    nodes: Vec<Node>,
+    /// Nodes ordered parents first.
+    order: Vec<usize>,
+    skins: Vec<Skin>,
+    primitives: Vec<Primitive>,
+    instances: Vec<Instance>,
+    clips: Vec<Clip>,
+    scratch: Scratch,
+}
+
+impl AnimatedModel {
+    /// A model without animation: [`AnimatedModel::clips`] is empty and only the rest soup is kept.
+    pub fn still(rest: TriangleSoup) -> Self {
+        Self::new(rest, Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new())
+            .expect("an empty node tree is valid")
+    }
+
+    /// Assembles a model, checking every index (parents, skins, joints, primitives, instances, channels) and
+    /// that the instances cover the rest soup's corners. `rest` is the static import (its UVs, colours,
+    /// parts and materials are kept; positions are replaced by each pose).
+    pub fn new(
+        rest: TriangleSoup,
+        nodes: Vec<Node>,
+        skins: Vec<Skin>,
+        primitives: Vec<Primitive>,
+        instances: Vec<Instance>,
+        clips: Vec<Clip>,
+    ) -> Result<Self> {
+        let order = parents_first(&nodes)?;
+        let invalid = |m: String| Err(VoxelError::Invalid(m));
+        for (s, skin) in skins.iter().enumerate() {
+            if skin.joints.len() != skin.inverse_bind.len() || skin.joints.len() > usize::from(u16::MAX) {
+                return invalid(format!(
+                    "skin {s}: {} joints but {} inverse bind matrices",
+                    skin.joints.len(),
+                    skin.inverse_bind.len()
+                ));
+            }
+            if let Some(j) = skin.joints.iter().find(|&&j| j >= nodes.len()) {
+                return invalid(format!("skin {s}: joint node {j} does not exist"));
+            }
+        }
+        if let Some((n, _)) = nodes.iter().enumerate().find(|(_, n)| n.skin.is_some_and(|s| s >= skins.len())) {
+            return invalid(format!("node {n} refers to a missing skin"));
+        }
+        for (p, prim) in primitives.iter().enumerate() {
+            let count = prim.positions.len();
+            if prim.corners.iter().any(|&c| c as usize >= count) || prim.targets.iter().any(|t| t.len() != count) {
+                return invalid(format!("primitive {p}: a corner or morph target does not match its {count} vertices"));
+            }
+            if let Some(inf) = &prim.influences
+                && (inf.joints.len() != count * inf.per_vertex || inf.weights.len() != inf.joints.len())
+            {
+                return invalid(format!("primitive {p}: skin weights do not match its {count} vertices"));
+            }
+        }
+        let mut covered = 0;
+        for inst in &instances {
+            let (Some(node), Some(prim)) = (nodes.get(inst.node), primitives.get(inst.primitive)) else {
+                return invalid(format!(
+                    "a part refers to node {} or primitive {} that does not exist",
+                    inst.node, inst.primitive
+                ));
+            };
+            if node.weights.len() != prim.targets.len() {
+                return invalid(format!(
+                    "node {}: {} morph weights for {} targets",
+                    inst.node,
+                    node.weights.len(),
+                    prim.targets.len()
+                ));
+            }
+            if let (Some(s), Some(inf)) = (node.skin, &prim.influences) {
+                let joints = skins[s].joints.len();
+                if let Some(j) = inf.joints.iter().find(|&&j| usize::from(j) >= joints) {
+                    return invalid(format!(
+                        "node {}: vertex joint {j} is out of range (the skin has {joints} joints)",
+                        inst.node
+                    ));
+                }
+            }
+            if inst.first_vertex != covered {
+                return invalid("the animated parts do not follow the static parts".into());
+            }
+            covered += prim.corners.len();
+        }
+        if !instances.is_empty() && covered != rest.vertices.len() {
+            return invalid(format!("the animated parts cover {covered} of {} corners", rest.vertices.len()));
+        }
+        for clip in &clips {
+            for ch in &clip.channels {
+                let Some(node) = nodes.get(ch.node) else {
+                    return invalid(format!("animation {}: channel targets missing node {}", clip.info.name, ch.node));
+                };
+                let width = match ch.target {
+                    Target::Translation | Target::Scale => 3,
+                    Target::Rotation => 4,
+                    Target::Weights => node.weights.len(),
+                };
+                if ch.sampler.width() != width {
+                    return invalid(format!(
+                        "animation {}: a {:?} channel of node {} has {} values per key, expected {width}",
+                        clip.info.name,
+                        ch.target,
+                        ch.node,
+                        ch.sampler.width()
+                    ));
+                }
+                if node.matrix.is_some() && ch.target != Target::Weights {
+                    return invalid(format!(
+                        "animation {}: node {} has a matrix and cannot be animated",
+                        clip.info.name, ch.node
+                    ));
+                }
+            }
+        }
+        let scratch = Scratch {
+            local: nodes.iter().map(|n| n.rest).collect(),
+            weights: nodes.iter().map(|n| n.weights.clone()).collect(),
+            global: vec![Mat4::IDENTITY; nodes.len()],
+            joints: Vec::new(),
+            positions: Vec::new(),
+            value: Vec::new(),
+        };
+        Ok(Self { rest, nodes, order, skins, primitives, instances, clips, scratch })
+    }
+
+    /// The static import (bind pose, node transforms applied), as [`crate::load_file`] returns it.
+    pub fn rest_soup(&self) -> &TriangleSoup {
+        &self.rest
+    }
+
+    /// The clips; empty when the model is not animated.
+    pub fn clips(&self) -> impl ExactSizeIterator<Item = &ClipInfo> {
+        self.clips.iter().map(|c| &c.info)
+    }
+
+    /// The index of the clip named `name`, else of the clip whose index `name` spells.
+    pub fn find_clip(&self, name: &str) -> Option<usize> {
+        self.clips
+            .iter()
+            .position(|c| c.info.name == name)
+            .or_else(|| name.parse::<usize>().ok().filter(|&i| i < self.clips.len()))
+    }
+
+    /// Poses clip `clip` at `t` seconds (wrapped into the clip: `t = duration + x` poses as `t = x`) into
+    /// `out`. `out` is reset to the rest soup when it does not have its shape; pass the same soup every
+    /// frame and only positions are written.
+    pub fn pose_into(&mut self, clip: usize, t: f32, out: &mut TriangleSoup) -> Result<()> {
+        let clip = clip_at(&self.clips, clip)?;
+        if !t.is_finite() {
+            return Err(VoxelError::Parameter(format!("pose time must be finite, got {t}")));
+        }
+        let duration = clip.info.duration;
+        let t = if duration > 0.0 { t.rem_euclid(duration) } else { 0.0 };
+        let s = &mut self.scratch;
+        for (n, node) in self.nodes.iter().enumerate() {
+            s.local[n] = node.rest;
+            s.weights[n].copy_from_slice(&node.weights);
+        }
+        for ch in &clip.channels {
+            s.value.resize(ch.sampler.width(), 0.0);
+            ch.sampler.sample(t, &mut s.value);
+            let v = &s.value;
+            let local = &mut s.local[ch.node];
+            match ch.target {
+                Target::Translation => local.translation = Vec3::from_slice(v),
+                Target::Rotation => local.rotation = Quat::from_slice(v),
+                Target::Scale => local.scale = Vec3::from_slice(v),
+                Target::Weights => s.weights[ch.node].copy_from_slice(v),
+            }
+        }
+        for &n in &self.order {
+            let node = &self.nodes[n];
+            let local = node.matrix.unwrap_or_else(|| s.local[n].matrix());
+            s.global[n] = node.parent.map_or(local, |p| s.global[p] * local);
+        }
+        let same_shape = out.vertices.len() == self.rest.vertices.len()
+            && out.parts.len() == self.rest.parts.len()
+            && out.materials.len() == self.rest.materials.len();
+        if !same_shape {
+            out.clone_from(&self.rest);
+        }
+        for inst in &self.instances {
+            let prim = &self.primitives[inst.primitive];
+            let node = &self.nodes[inst.node];
+            s.positions.clear();
+            s.positions.extend_from_slice(&prim.positions);
+            for (target, &w) in prim.targets.iter().zip(&s.weights[inst.node]) {
+                if w != 0.0 {
+                    s.positions.iter_mut().zip(target).for_each(|(p, d)| *p += w * *d);
+                }
+            }
+            match (node.skin, &prim.influences) {
+                (Some(skin), Some(influences)) => {
+                    let skin = &self.skins[skin];
+                    s.joints.clear();
+                    s.joints.extend(skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ibm)| s.global[j] * *ibm));
+                    skin_positions(&mut s.positions, influences, &s.joints, s.global[inst.node]);
+                }
+                _ => {
+                    let m = s.global[inst.node];
+                    s.positions.iter_mut().for_each(|p| *p = m.transform_point3(*p));
+                }
+            }
+            let corners = &mut out.vertices[inst.first_vertex..inst.first_vertex + prim.corners.len()];
+            for (v, &c) in corners.iter_mut().zip(&prim.corners) {
+                v.position = s.positions[c as usize].to_array();
+            }
+        }
+        Ok(())
+    }
+
+    /// The union of the bounds of clip `clip`'s poses, sampled at [`BOUNDS_SAMPLES_PER_SECOND`] and at
+    /// every keyframe time: the box to voxelize every frame of the clip in
+    /// ([`crate::voxelize::voxelize_within`]), so the grid does not move as the pose changes.
+    pub fn clip_bounds(&mut self, clip: usize) -> Result<Bounds> {
+        let Clip { info, channels } = clip_at(&self.clips, clip)?;
+        let duration = info.duration;
+        let samples = (duration * BOUNDS_SAMPLES_PER_SECOND).ceil() as usize;
+        let mut times: Vec<f32> = (0..=samples).map(|i| i as f32 / BOUNDS_SAMPLES_PER_SECOND).collect();
+        times.retain(|&t| t <= duration);
+        times.extend(channels.iter().flat_map(|c| c.sampler.times().iter().copied()));
+        times.sort_by(f32::total_cmp);
+        times.dedup();
+        let mut soup = TriangleSoup::default();
+        let mut union: Option<Bounds> = None;
+        for t in times {
+            // The clip's last key time wraps to 0; pose it as the end of the clip instead.
+            let t = if t >= duration { duration.next_down() } else { t };
+            self.pose_into(clip, t.max(0.0), &mut soup)?;
+            let Some((lo, hi)) = soup.bounds() else { continue };
+            union = Some(match union {
+                None => (lo, hi),
+                Some((ulo, uhi)) => {
+                    (std::array::from_fn(|a| ulo[a].min(lo[a])), std::array::from_fn(|a| uhi[a].max(hi[a])))
+                }
+            });
+        }
+        union.ok_or_else(|| VoxelError::Empty(String::new()))
+    }
+}
+
+/// Clip `clip`, or an error naming it.
+fn clip_at(clips: &[Clip], clip: usize) -> Result<&Clip> {
+    clips
+        .get(clip)
+        .ok_or_else(|| VoxelError::Parameter(format!("clip {clip} does not exist (the model has {})", clips.len())))
+}
+
+/// Linear-blend skinning in place: each position becomes Σ wᵢ · joint[jᵢ] · p / Σ wᵢ (weights that do not
+/// sum to 1 are normalized); vertices without weight follow `node` (their node's global transform).
+fn skin_positions(positions: &mut [Vec3], influences: &Influences, joints: &[Mat4], node: Mat4) {
+    let k = influences.per_vertex;
+    for (v, p) in positions.iter_mut().enumerate() {
+        let range = v * k..(v + 1) * k;
+        let mut blended = Mat4::ZERO;
+        let mut total = 0.0;
+        for (&j, &w) in influences.joints[range.clone()].iter().zip(&influences.weights[range]) {
+            if w != 0.0 {
+                blended += joints[usize::from(j)] * w;
+                total += w;
+            }
+        }
+        *p = if total > 0.0 { blended.transform_point3(*p) / total } else { node.transform_point3(*p) };
+    }
+}
+
+/// The nodes ordered so that every parent comes before its children; a cycle is an error.
+fn parents_first(nodes: &[Node]) -> Result<Vec<usize>> {
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+    let mut order = Vec::with_capacity(nodes.len());
+    for (n, node) in nodes.iter().enumerate() {
+        match node.parent {
+            Some(p) if p < nodes.len() => children[p].push(n),
+            Some(p) => return Err(VoxelError::Invalid(format!("node {n} has a missing parent {p}"))),
+            None => order.push(n),
+        }
+    }
+    let mut next = 0;
+    while next < order.len() {
+        order.extend_from_slice(&children[order[next]]);
+        next += 1;
+    }
+    if order.len() != nodes.len() {
+        return Err(VoxelError::Invalid("the node graph has a cycle".into()));
+    }
+    Ok(order)
+}
