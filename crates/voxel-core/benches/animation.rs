@@ -42,7 +42,7 @@ fn main() {
                 continue;
             }
         };
-        let clips: Vec<_> = model.clips().cloned().collect();
+        let clips: Vec<_> = model.clips().to_vec();
         for (clip, info) in clips.iter().enumerate() {
             let bounds = model.clip_bounds(clip).expect("bounds");
             let mut soup = TriangleSoup::default();

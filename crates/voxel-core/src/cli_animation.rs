@@ -61,17 +61,17 @@ fn to_json(value: &impl serde::Serialize) -> Result<String> {
 pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeOptions) -> Result<Vec<String>> {
     let mut model = crate::import::load_animated_file(file)?;
     let name = file.display().to_string();
-    if model.clips().len() == 0 {
+    if model.clips().is_empty() {
         return Err(VoxelError::Parameter("the model has no animations".into()));
     }
     if request.animation == "list" {
         return list_clips(&model, &name, request.json);
     }
     let clip = model.find_clip(request.animation).ok_or_else(|| {
-        let names: Vec<String> = model.clips().enumerate().map(|(i, c)| format!("{i}: {}", c.name)).collect();
+        let names: Vec<String> = model.clips().iter().enumerate().map(|(i, c)| format!("{i}: {}", c.name)).collect();
         VoxelError::Parameter(format!("no animation {:?} (the model has {})", request.animation, names.join(", ")))
     })?;
-    let info = model.clips().nth(clip).cloned().ok_or_else(|| VoxelError::Parameter("no clip".into()))?;
+    let info = model.clips()[clip].clone();
     let frames = frame_count(request.fps, request.duration.unwrap_or(info.duration))?;
     if let Some(out) = request.out {
         std::fs::create_dir_all(out).map_err(|e| VoxelError::Export { path: out.to_owned(), reason: e.to_string() })?;
@@ -140,6 +140,7 @@ fn frame_count(fps: f32, duration: f32) -> Result<usize> {
 fn list_clips(model: &AnimatedModel, name: &str, json: bool) -> Result<Vec<String>> {
     model
         .clips()
+        .iter()
         .enumerate()
         .map(|(index, c)| {
             if json {

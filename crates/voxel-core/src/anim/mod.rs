@@ -169,15 +169,26 @@ pub struct AnimatedModel {
     skins: Vec<Skin>,
     primitives: Vec<Primitive>,
     instances: Vec<Instance>,
-    clips: Vec<Clip>,
+    clips: Vec<ClipInfo>,
+    /// The channels of each clip.
+    channels: Vec<Vec<Channel>>,
     scratch: Scratch,
 }
 
 impl AnimatedModel {
     /// A model without animation: [`AnimatedModel::clips`] is empty and only the rest soup is kept.
     pub fn still(rest: TriangleSoup) -> Self {
-        Self::new(rest, Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new())
-            .expect("an empty node tree is valid")
+        Self {
+            rest,
+            nodes: Vec::new(),
+            order: Vec::new(),
+            skins: Vec::new(),
+            primitives: Vec::new(),
+            instances: Vec::new(),
+            clips: Vec::new(),
+            channels: Vec::new(),
+            scratch: Scratch::default(),
+        }
     }
 
     /// Assembles a model, checking every index (parents, skins, joints, primitives, instances, channels) and
@@ -287,7 +298,8 @@ impl AnimatedModel {
             positions: Vec::new(),
             value: Vec::new(),
         };
-        Ok(Self { rest, nodes, order, skins, primitives, instances, clips, scratch })
+        let (clips, channels) = clips.into_iter().map(|c| (c.info, c.channels)).unzip();
+        Ok(Self { rest, nodes, order, skins, primitives, instances, clips, channels, scratch })
     }
 
     /// The static import (bind pose, node transforms applied), as [`crate::load_file`] returns it.
@@ -296,15 +308,15 @@ impl AnimatedModel {
     }
 
     /// The clips; empty when the model is not animated.
-    pub fn clips(&self) -> impl ExactSizeIterator<Item = &ClipInfo> {
-        self.clips.iter().map(|c| &c.info)
+    pub fn clips(&self) -> &[ClipInfo] {
+        &self.clips
     }
 
     /// The index of the clip named `name`, else of the clip whose index `name` spells.
     pub fn find_clip(&self, name: &str) -> Option<usize> {
         self.clips
             .iter()
-            .position(|c| c.info.name == name)
+            .position(|c| c.name == name)
             .or_else(|| name.parse::<usize>().ok().filter(|&i| i < self.clips.len()))
     }
 
@@ -312,18 +324,18 @@ impl AnimatedModel {
     /// `out`. `out` is reset to the rest soup when it does not have its shape; pass the same soup every
     /// frame and only positions are written.
     pub fn pose_into(&mut self, clip: usize, t: f32, out: &mut TriangleSoup) -> Result<()> {
-        let clip = clip_at(&self.clips, clip)?;
+        check_clip(&self.clips, clip)?;
         if !t.is_finite() {
             return Err(VoxelError::Parameter(format!("pose time must be finite, got {t}")));
         }
-        let duration = clip.info.duration;
+        let duration = self.clips[clip].duration;
         let t = if duration > 0.0 { t.rem_euclid(duration) } else { 0.0 };
         let s = &mut self.scratch;
         for (n, node) in self.nodes.iter().enumerate() {
             s.local[n] = node.rest;
             s.weights[n].copy_from_slice(&node.weights);
         }
-        for ch in &clip.channels {
+        for ch in &self.channels[clip] {
             s.value.resize(ch.sampler.width(), 0.0);
             ch.sampler.sample(t, &mut s.value);
             let v = &s.value;
@@ -380,12 +392,12 @@ impl AnimatedModel {
     /// every keyframe time: the box to voxelize every frame of the clip in
     /// ([`crate::voxelize::voxelize_within`]), so the grid does not move as the pose changes.
     pub fn clip_bounds(&mut self, clip: usize) -> Result<Bounds> {
-        let Clip { info, channels } = clip_at(&self.clips, clip)?;
-        let duration = info.duration;
+        check_clip(&self.clips, clip)?;
+        let duration = self.clips[clip].duration;
         let samples = (duration * BOUNDS_SAMPLES_PER_SECOND).ceil() as usize;
         let mut times: Vec<f32> = (0..=samples).map(|i| i as f32 / BOUNDS_SAMPLES_PER_SECOND).collect();
         times.retain(|&t| t <= duration);
-        times.extend(channels.iter().flat_map(|c| c.sampler.times().iter().copied()));
+        times.extend(self.channels[clip].iter().flat_map(|c| c.sampler.times().iter().copied()));
         times.sort_by(f32::total_cmp);
         times.dedup();
         let mut soup = TriangleSoup::default();
@@ -406,11 +418,13 @@ impl AnimatedModel {
     }
 }
 
-/// Clip `clip`, or an error naming it.
-fn clip_at(clips: &[Clip], clip: usize) -> Result<&Clip> {
-    clips
-        .get(clip)
-        .ok_or_else(|| VoxelError::Parameter(format!("clip {clip} does not exist (the model has {})", clips.len())))
+/// An error naming `clip` when it is not one of `clips`.
+fn check_clip(clips: &[ClipInfo], clip: usize) -> Result<()> {
+    if clip < clips.len() {
+        Ok(())
+    } else {
+        Err(VoxelError::Parameter(format!("clip {clip} does not exist (the model has {})", clips.len())))
+    }
 }
 
 /// Linear-blend skinning in place: each position becomes Σ wᵢ · joint[jᵢ] · p / Σ wᵢ (weights that do not

@@ -13,13 +13,12 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::accessor::DataType;
 use gltf::animation::Property;
 
-use super::{PartSource, Source, accessor, import_with};
+use super::{PartSource, SoupBuilder, accessor, import_with};
 use crate::anim::{
     AnimatedModel, Channel, Clip, ClipInfo, Influences, Instance, Interpolation, Node, Primitive, Sampler, Skin,
     Target, Trs,
 };
 use crate::error::{Result, VoxelError};
-use crate::soup::TriangleSoup;
 
 /// Imports a .glb or .gltf file with its animations (see [`load_animated_slice`]).
 pub fn load_animated_file(path: &Path) -> Result<AnimatedModel> {
@@ -33,8 +32,8 @@ pub fn load_animated_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<Anim
     import_with(bytes, base_dir, build)
 }
 
-fn build(soup: TriangleSoup, source: Source<'_>) -> Result<AnimatedModel> {
-    let document = source.document;
+fn build(document: &gltf::Document, source: SoupBuilder<'_>) -> Result<AnimatedModel> {
+    let soup = source.soup;
     if document.animations().len() == 0 {
         return Ok(AnimatedModel::still(soup));
     }

@@ -50,17 +50,7 @@ pub fn load_file(path: &Path) -> Result<TriangleSoup> {
 
 /// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
 pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
-    import_with(bytes, base_dir, |soup, _| Ok(soup))
-}
-
-/// What the static import read, for the animation reader to build on.
-struct Source<'a> {
-    document: &'a gltf::Document,
-    buffers: &'a [gltf::buffer::Data],
-    /// Decoded primitives per mesh index.
-    parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
-    /// Where each soup part came from, in part order.
-    instances: Vec<PartSource>,
+    import_with(bytes, base_dir, |_, builder| Ok(builder.soup))
 }
 
 /// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
@@ -71,11 +61,12 @@ struct PartSource {
     first_vertex: usize,
 }
 
-/// Imports the soup, then hands it with what it was read from to `finish`.
+/// Imports the soup, then hands the document and the builder (the soup and what it was decoded from) to
+/// `finish`.
 fn import_with<T>(
     bytes: &[u8],
     base_dir: Option<&Path>,
-    finish: impl FnOnce(TriangleSoup, Source<'_>) -> Result<T>,
+    finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
 ) -> Result<T> {
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
@@ -94,12 +85,11 @@ fn import_with<T>(
             builder.add_mesh(node.index(), &mesh, &transform)?;
         }
     }
-    let SoupBuilder { soup, parts_of_mesh, instances, .. } = builder;
-    if soup.triangle_count() == 0 {
+    if builder.soup.triangle_count() == 0 {
         return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
     }
-    soup.validate()?;
-    finish(soup, Source { document: &document, buffers: &buffers, parts_of_mesh, instances })
+    builder.soup.validate()?;
+    finish(&document, builder)
 }
 
 fn describe_parse_error(e: gltf::Error) -> VoxelError {

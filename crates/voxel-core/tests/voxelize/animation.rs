@@ -127,7 +127,7 @@ const TURN_KEYS: [f32; 12] =
 fn a_one_joint_skin_turned_90_degrees_moves_its_vertices_as_computed_by_hand() {
     let mut model = load_animated_slice(&skinned_cube(&TURN_KEYS, "LINEAR", 0), None).unwrap();
     assert_eq!(
-        model.clips().map(|c| (c.name.clone(), c.duration, c.channels)).collect::<Vec<_>>(),
+        model.clips().iter().map(|c| (c.name.clone(), c.duration, c.channels)).collect::<Vec<_>>(),
         [("turn".to_owned(), 2.0, 1)]
     );
     let rest = model.rest_soup().clone();
@@ -248,7 +248,7 @@ fn morph_cube(scale_keys: Option<[f32; 9]>) -> Vec<u8> {
 #[test]
 fn a_morph_weight_of_one_gives_the_targets_positions_and_a_translation_channel_moves_the_node() {
     let mut model = load_animated_slice(&morph_cube(None), None).unwrap();
-    assert_eq!(model.clips().next().unwrap().name, "animation 0");
+    assert_eq!(model.clips()[0].name, "animation 0");
     let rest = positions(model.rest_soup());
     // t = 0.5: weight 0 (STEP), translation 1 along x.
     for (r, p) in rest.iter().zip(positions(&pose(&mut model, 0, 0.5))) {
@@ -293,7 +293,7 @@ fn a_model_without_animations_has_no_clips_and_cannot_be_posed() {
     let (pos, idx, _) = b.cube();
     let bytes = b.glb(json!({"scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}]}));
     let mut model = load_animated_slice(&bytes, None).unwrap();
-    assert_eq!(model.clips().len(), 0);
+    assert!(model.clips().is_empty());
     assert_eq!(model.rest_soup().vertices, load_slice(&bytes, None).unwrap().vertices);
     assert!(model.pose_into(0, 0.0, &mut TriangleSoup::default()).is_err());
 }
@@ -321,7 +321,8 @@ fn max_motion(a: &TriangleSoup, b: &TriangleSoup) -> f32 {
 fn the_fox_poses_away_from_its_bind_pose_and_moves_where_its_clips_move() {
     let Some(path) = model("khronos-fox.glb") else { return };
     let mut fox = load_animated_file(&path).unwrap();
-    let clips: Vec<_> = fox.clips().map(|c| (c.name.clone(), (c.duration * 1e4).round() / 1e4, c.channels)).collect();
+    let clips: Vec<_> =
+        fox.clips().iter().map(|c| (c.name.clone(), (c.duration * 1e4).round() / 1e4, c.channels)).collect();
     assert_eq!(clips, [("Survey".into(), 3.4167, 21), ("Walk".into(), 0.7083, 21), ("Run".into(), 1.1583, 21)]);
     let bind = fox.rest_soup().clone();
     // The fox is about 155 long (z), 79 high (y); its feet are at y < 10.
@@ -348,7 +349,7 @@ fn the_fox_poses_away_from_its_bind_pose_and_moves_where_its_clips_move() {
 fn cesium_man_walks_with_sane_bounds_inside_the_clip_bounds() {
     let Some(path) = model("khronos-cesiumman.glb") else { return };
     let mut man = load_animated_file(&path).unwrap();
-    assert_eq!(man.clips().map(|c| (c.duration, c.channels)).collect::<Vec<_>>(), [(2.0, 57)]);
+    assert_eq!(man.clips().iter().map(|c| (c.duration, c.channels)).collect::<Vec<_>>(), [(2.0, 57)]);
     let (bind_lo, bind_hi) = man.rest_soup().bounds().unwrap();
     let (lo, hi) = man.clip_bounds(0).unwrap();
     let bind = man.rest_soup().clone();
@@ -461,8 +462,8 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
 
 #[test]
 fn the_cli_reports_every_frame_as_json_and_names_bad_requests() {
-    let dir = temp_model("cube.glb", &morph_cube(None));
-    let file = dir.join("cube.glb");
+    let dir = temp_model("slide.glb", &morph_cube(None));
+    let file = dir.join("slide.glb");
     let options = voxel_core::VoxelizeOptions::default();
     let request = ClipRequest { animation: "animation 0", fps: 2.0, duration: Some(3.0), out: None, json: true };
     let lines = voxelize_clip(&file, &request, &options).unwrap();
