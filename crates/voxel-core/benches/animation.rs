@@ -1,6 +1,9 @@
 //! `cargo bench -p voxel-core --bench animation`: poses and voxelizes the animated models of ../shared/models
 //! (or `VOXEL_ART_MODELS`) frame by frame at the default grid, in the clip's fixed grid, and prints a
-//! Markdown table of medians: pose alone, voxelize alone, and both (one app frame's work).
+//! Markdown table of medians: pose alone, voxelize alone, and both (one app frame's work), plus the CPU time
+//! per frame summed over all threads (from /proc/self/task/*/schedstat on Linux), which a machine shared
+//! with other builds inflates far less than wall time. Words after `--` keep only the models whose path
+//! contains one of them (`-- fox`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,6 +26,15 @@ fn models_dir() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
 }
 
+/// Nanoseconds this process's threads have run on a CPU (Linux), `None` elsewhere.
+fn cpu_ns() -> Option<u64> {
+    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
+    let on_cpu = |task: std::fs::DirEntry| -> Option<u64> {
+        std::fs::read_to_string(task.path().join("schedstat")).ok()?.split_whitespace().next()?.parse().ok()
+    };
+    Some(tasks.flatten().filter_map(on_cpu).sum())
+}
+
 fn median(mut times: Vec<f64>) -> f64 {
     times.sort_by(f64::total_cmp);
     times[times.len() / 2]
@@ -31,14 +43,16 @@ fn median(mut times: Vec<f64>) -> f64 {
 fn main() {
     let dir = models_dir();
     println!("threads: {}", rayon::current_num_threads());
-    println!("| model | clip | triangles | grid | pose ms | voxelize ms | pose + voxelize ms |");
-    println!("|---|---|---:|---|---:|---:|---:|");
+    println!("| model | clip | triangles | grid | pose ms | voxelize ms | pose + voxelize ms | CPU ms / frame |");
+    println!("|---|---|---:|---|---:|---:|---:|---:|");
     let options = VoxelizeOptions::default();
-    for name in MODELS {
+    // cargo bench passes `--bench`; other words filter the models.
+    let filters: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
+    for name in MODELS.iter().filter(|m| filters.is_empty() || filters.iter().any(|f| m.contains(f.as_str()))) {
         let mut model = match load_animated_file(&dir.join(name)) {
             Ok(m) => m,
             Err(e) => {
-                println!("| {name} | error: {e} | | | | | |");
+                println!("| {name} | error: {e} | | | | | | |");
                 continue;
             }
         };
@@ -48,8 +62,12 @@ fn main() {
             let mut soup = TriangleSoup::default();
             let (mut pose, mut voxelize, mut both) = (Vec::new(), Vec::new(), Vec::new());
             let mut grid = [0; 3];
+            let mut cpu_start = None;
             // A warm-up pass, then the timed one.
             for pass in 0..2 {
+                if pass == 1 {
+                    cpu_start = cpu_ns();
+                }
                 for frame in 0..FRAMES {
                     let t = info.duration * frame as f32 / FRAMES as f32;
                     let t0 = Instant::now();
@@ -65,8 +83,12 @@ fn main() {
                     }
                 }
             }
+            let cpu = cpu_start.zip(cpu_ns()).map_or_else(
+                || "–".to_owned(),
+                |(start, end)| format!("{:.2}", (end - start) as f64 / 1e6 / FRAMES as f64),
+            );
             println!(
-                "| {name} | {} | {} | {}×{}×{} | {:.3} | {:.2} | {:.2} |",
+                "| {name} | {} | {} | {}×{}×{} | {:.3} | {:.2} | {:.2} | {cpu} |",
                 info.name,
                 soup.triangle_count(),
                 grid[0],
