@@ -26,6 +26,9 @@ pub type Bounds = ([f32; 3], [f32; 3]);
 /// Poses per second sampled (besides every keyframe time) when fitting a grid to a clip.
 pub const BOUNDS_SAMPLES_PER_SECOND: f32 = 30.0;
 
+/// The most evenly spaced poses sampled for a clip's bounds (a very long clip is sampled more sparsely).
+pub const MAX_BOUNDS_SAMPLES: usize = 10_000;
+
 /// What a caller needs to know about a clip.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClipInfo {
@@ -388,14 +391,15 @@ impl AnimatedModel {
         Ok(())
     }
 
-    /// The union of the bounds of clip `clip`'s poses, sampled at [`BOUNDS_SAMPLES_PER_SECOND`] and at
-    /// every keyframe time: the box to voxelize every frame of the clip in
+    /// The union of the bounds of clip `clip`'s poses, sampled at [`BOUNDS_SAMPLES_PER_SECOND`] (at most
+    /// [`MAX_BOUNDS_SAMPLES`] poses) and at every keyframe time: the box to voxelize every frame of the clip in
     /// ([`crate::voxelize::voxelize_within`]), so the grid does not move as the pose changes.
     pub fn clip_bounds(&mut self, clip: usize) -> Result<Bounds> {
         check_clip(&self.clips, clip)?;
         let duration = self.clips[clip].duration;
-        let samples = (duration * BOUNDS_SAMPLES_PER_SECOND).ceil() as usize;
-        let mut times: Vec<f32> = (0..=samples).map(|i| i as f32 / BOUNDS_SAMPLES_PER_SECOND).collect();
+        let samples = ((duration * BOUNDS_SAMPLES_PER_SECOND).ceil() as usize).min(MAX_BOUNDS_SAMPLES);
+        let step = (1.0 / BOUNDS_SAMPLES_PER_SECOND).max(duration / MAX_BOUNDS_SAMPLES as f32);
+        let mut times: Vec<f32> = (0..=samples).map(|i| i as f32 * step).collect();
         times.retain(|&t| t <= duration);
         times.extend(self.channels[clip].iter().flat_map(|c| c.sampler.times().iter().copied()));
         times.sort_by(f32::total_cmp);

@@ -492,3 +492,12 @@ fn the_cli_reports_every_frame_as_json_and_names_bad_requests() {
     assert!(err.to_string().contains("no animation \"7\" (the model has 0: animation 0)"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_soup_beyond_the_given_bounds_is_clipped_at_the_grids_edge() {
+    let soup = TriangleSoup::from_mesh(&voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
+    // Bounds holding the cube's lower half along x: the grid covers it, the other half is cut off.
+    let m = voxelize_within(&soup, &at_resolution(16), ([0.0; 3], [0.5, 1.0, 1.0])).unwrap();
+    assert_eq!(m.stats.grid, [8, 16, 16]);
+    assert_eq!(m.stats.voxels, 8 * 16 * 16);
+}
