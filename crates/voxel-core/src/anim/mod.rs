@@ -11,6 +11,7 @@
 //! Built by [`crate::import::load_animated_file`]; [`AnimatedModel::pose_into`] reuses its buffers, so
 //! posing allocates nothing after the first frame.
 
+mod check;
 mod sampler;
 
 use glam::{Mat4, Quat, Vec3};
@@ -51,6 +52,17 @@ pub enum Target {
     Scale,
     /// Morph-target weights (one per target of the node's mesh).
     Weights,
+}
+
+impl Target {
+    /// Values per keyframe: 3, 4 for a rotation, or the node's number of morph targets for weights.
+    pub fn width(self, morph_targets: usize) -> usize {
+        match self {
+            Target::Translation | Target::Scale => 3,
+            Target::Rotation => 4,
+            Target::Weights => morph_targets,
+        }
+    }
 }
 
 /// One animated property of one node.
@@ -206,93 +218,10 @@ impl AnimatedModel {
         clips: Vec<Clip>,
     ) -> Result<Self> {
         let order = parents_first(&nodes)?;
-        let invalid = |m: String| Err(VoxelError::Invalid(m));
-        for (s, skin) in skins.iter().enumerate() {
-            if skin.joints.len() != skin.inverse_bind.len() || skin.joints.len() > usize::from(u16::MAX) {
-                return invalid(format!(
-                    "skin {s}: {} joints but {} inverse bind matrices",
-                    skin.joints.len(),
-                    skin.inverse_bind.len()
-                ));
-            }
-            if let Some(j) = skin.joints.iter().find(|&&j| j >= nodes.len()) {
-                return invalid(format!("skin {s}: joint node {j} does not exist"));
-            }
-        }
-        if let Some((n, _)) = nodes.iter().enumerate().find(|(_, n)| n.skin.is_some_and(|s| s >= skins.len())) {
-            return invalid(format!("node {n} refers to a missing skin"));
-        }
-        for (p, prim) in primitives.iter().enumerate() {
-            let count = prim.positions.len();
-            if prim.corners.iter().any(|&c| c as usize >= count) || prim.targets.iter().any(|t| t.len() != count) {
-                return invalid(format!("primitive {p}: a corner or morph target does not match its {count} vertices"));
-            }
-            if let Some(inf) = &prim.influences
-                && (inf.joints.len() != count * inf.per_vertex || inf.weights.len() != inf.joints.len())
-            {
-                return invalid(format!("primitive {p}: skin weights do not match its {count} vertices"));
-            }
-        }
-        let mut covered = 0;
-        for inst in &instances {
-            let (Some(node), Some(prim)) = (nodes.get(inst.node), primitives.get(inst.primitive)) else {
-                return invalid(format!(
-                    "a part refers to node {} or primitive {} that does not exist",
-                    inst.node, inst.primitive
-                ));
-            };
-            if node.weights.len() != prim.targets.len() {
-                return invalid(format!(
-                    "node {}: {} morph weights for {} targets",
-                    inst.node,
-                    node.weights.len(),
-                    prim.targets.len()
-                ));
-            }
-            if let (Some(s), Some(inf)) = (node.skin, &prim.influences) {
-                let joints = skins[s].joints.len();
-                if let Some(j) = inf.joints.iter().find(|&&j| usize::from(j) >= joints) {
-                    return invalid(format!(
-                        "node {}: vertex joint {j} is out of range (the skin has {joints} joints)",
-                        inst.node
-                    ));
-                }
-            }
-            if inst.first_vertex != covered {
-                return invalid("the animated parts do not follow the static parts".into());
-            }
-            covered += prim.corners.len();
-        }
-        if !instances.is_empty() && covered != rest.vertices.len() {
-            return invalid(format!("the animated parts cover {covered} of {} corners", rest.vertices.len()));
-        }
-        for clip in &clips {
-            for ch in &clip.channels {
-                let Some(node) = nodes.get(ch.node) else {
-                    return invalid(format!("animation {}: channel targets missing node {}", clip.info.name, ch.node));
-                };
-                let width = match ch.target {
-                    Target::Translation | Target::Scale => 3,
-                    Target::Rotation => 4,
-                    Target::Weights => node.weights.len(),
-                };
-                if ch.sampler.width() != width {
-                    return invalid(format!(
-                        "animation {}: a {:?} channel of node {} has {} values per key, expected {width}",
-                        clip.info.name,
-                        ch.target,
-                        ch.node,
-                        ch.sampler.width()
-                    ));
-                }
-                if node.matrix.is_some() && ch.target != Target::Weights {
-                    return invalid(format!(
-                        "animation {}: node {} has a matrix and cannot be animated",
-                        clip.info.name, ch.node
-                    ));
-                }
-            }
-        }
+        check::skins(&skins, &nodes)?;
+        check::primitives(&primitives)?;
+        check::instances(&instances, &nodes, &skins, &primitives, rest.vertices.len())?;
+        check::clips(&clips, &nodes)?;
         let scratch = Scratch {
             local: nodes.iter().map(|n| n.rest).collect(),
             weights: nodes.iter().map(|n| n.weights.clone()).collect(),

@@ -233,11 +233,7 @@ fn read_clip(animation: &gltf::Animation<'_>, nodes: &[Node], buffers: &[gltf::b
                 (Target::Weights, accessor::read_vecs::<1>(&output, buffers, &out_what)?.concat())
             }
         };
-        let width = match target {
-            Target::Translation | Target::Scale => 3,
-            Target::Rotation => 4,
-            Target::Weights => nodes[node].weights.len(),
-        };
+        let width = target.width(nodes[node].weights.len());
         if width == 0 {
             return Err(VoxelError::Invalid(format!("{what}: node {node} has no morph targets to weight")));
         }
