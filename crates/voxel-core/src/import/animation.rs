@@ -32,27 +32,27 @@ pub fn load_animated_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<Anim
     import_with(bytes, base_dir, build)
 }
 
-fn build(document: &gltf::Document, source: SoupBuilder<'_>) -> Result<AnimatedModel> {
-    let soup = source.soup;
+fn build(document: &gltf::Document, builder: SoupBuilder<'_>) -> Result<AnimatedModel> {
+    let soup = builder.soup;
     if document.animations().len() == 0 {
         return Ok(AnimatedModel::still(soup));
     }
     let nodes = read_nodes(document)?;
-    let skins = document.skins().map(|skin| read_skin(&skin, source.buffers)).collect::<Result<Vec<_>>>()?;
+    let skins = document.skins().map(|skin| read_skin(&skin, builder.buffers)).collect::<Result<Vec<_>>>()?;
     let mut primitives = Vec::new();
     let mut primitive_of: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut instances = Vec::with_capacity(source.instances.len());
-    for &PartSource { node, mesh, decoded, first_vertex } in &source.instances {
+    let mut instances = Vec::with_capacity(builder.instances.len());
+    for &PartSource { node, mesh, decoded, first_vertex } in &builder.instances {
         let primitive = match primitive_of.get(&(mesh, decoded)) {
             Some(&p) => p,
             None => {
-                let decoded_prim = &source.parts_of_mesh[&mesh][decoded];
+                let decoded_prim = &builder.parts_of_mesh[&mesh][decoded];
                 let gltf_mesh = document.meshes().nth(mesh).ok_or_else(|| missing("mesh", mesh))?;
                 let gltf_prim = gltf_mesh
                     .primitives()
                     .nth(decoded_prim.primitive)
                     .ok_or_else(|| missing("primitive", decoded_prim.primitive))?;
-                primitives.push(read_primitive(decoded_prim, &gltf_prim, source.buffers)?);
+                primitives.push(read_primitive(decoded_prim, &gltf_prim, builder.buffers)?);
                 primitive_of.insert((mesh, decoded), primitives.len() - 1);
                 primitives.len() - 1
             }
@@ -61,7 +61,7 @@ fn build(document: &gltf::Document, source: SoupBuilder<'_>) -> Result<AnimatedM
     }
     let clips = document
         .animations()
-        .map(|animation| read_clip(&animation, &nodes, source.buffers))
+        .map(|animation| read_clip(&animation, &nodes, builder.buffers))
         .collect::<Result<Vec<_>>>()?;
     AnimatedModel::new(soup, nodes, skins, primitives, instances, clips)
 }
