@@ -82,17 +82,21 @@ fn assert_close(a: [f32; 3], b: [f32; 3], what: &str) {
 
 /// A cube skinned to joint node 1 (rest at x = 2, bind pose there) and static joint node 2 at the origin;
 /// the clip turns joint 1 from 0° to 90° about +Z over the first second and holds until t = 2. Corners with
-/// z = 1 hang on both joints with weights 2 and 2 (not summing to 1); the others on joint 1 alone. The
-/// skinned node is translated by 100 along x, which skinning must ignore.
+/// z = 1 hang on both joints with weights 2 and 2 (not summing to 1), joint 1 through JOINTS_0/WEIGHTS_0 and
+/// joint 2 through JOINTS_1/WEIGHTS_1; the others on `joint` alone. The skinned node is translated by 100
+/// along x, which skinning must ignore.
 fn skinned_cube(rotation_keys: &[f32], interpolation: &str, joint: u16) -> Vec<u8> {
     let mut b = Buffers::default();
     let (pos, idx, corners) = b.cube();
-    let joints: Vec<u16> =
-        corners.iter().flat_map(|p| if p[2] > 0.5 { [0, 1, 0, 0] } else { [joint, 0, 0, 0] }).collect();
-    let weights: Vec<f32> =
-        corners.iter().flat_map(|p| if p[2] > 0.5 { [2.0, 2.0, 0.0, 0.0] } else { [1.0, 0.0, 0.0, 0.0] }).collect();
+    let joints: Vec<u16> = corners.iter().flat_map(|p| [if p[2] > 0.5 { 0 } else { joint }, 0, 0, 0]).collect();
+    let weights: Vec<f32> = corners.iter().flat_map(|p| [if p[2] > 0.5 { 2.0 } else { 1.0 }, 0.0, 0.0, 0.0]).collect();
+    let second_joints: Vec<u16> = corners.iter().flat_map(|_| [1, 0, 0, 0]).collect();
+    let second_weights: Vec<f32> =
+        corners.iter().flat_map(|p| [if p[2] > 0.5 { 2.0 } else { 0.0 }, 0.0, 0.0, 0.0]).collect();
     let joints = b.shorts(&joints, "VEC4", 4);
     let weights = b.floats(&weights, "VEC4", 4);
+    let second_joints = b.shorts(&second_joints, "VEC4", 4);
+    let second_weights = b.floats(&second_weights, "VEC4", 4);
     let inverse_bind: Vec<f32> = [
         glam::Mat4::from_translation(glam::vec3(-2.0, 0.0, 0.0)).to_cols_array(),
         glam::Mat4::IDENTITY.to_cols_array(),
@@ -109,7 +113,9 @@ fn skinned_cube(rotation_keys: &[f32], interpolation: &str, joint: u16) -> Vec<u
             {"translation": [2.0, 0.0, 0.0]},
             {}
         ],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "JOINTS_0": joints, "WEIGHTS_0": weights}, "indices": idx}]}],
+        "meshes": [{"primitives": [{"attributes": {
+            "POSITION": pos, "JOINTS_0": joints, "WEIGHTS_0": weights, "JOINTS_1": second_joints, "WEIGHTS_1": second_weights
+        }, "indices": idx}]}],
         "skins": [{"joints": [1, 2], "inverseBindMatrices": inverse_bind}],
         "animations": [{
             "name": "turn",
@@ -451,6 +457,8 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
     // Listing works; unknown clips and unanimated models are errors.
     assert_eq!(run(&[file.as_os_str(), "--animation".as_ref(), "list".as_ref()]), 0);
     assert_eq!(run(&[file.as_os_str(), "--animation".as_ref(), "gallop".as_ref()]), 1);
+    // --fps and --duration only go with --animation (a usage error).
+    assert_eq!(run(&[file.as_os_str(), "--fps".as_ref(), "4".as_ref()]), 2);
     let still = temp_model(
         "still.glb",
         &voxel_core::glb::soup_to_glb(voxel_core::load_slice(&morph_cube(None), None).as_ref().unwrap()),
