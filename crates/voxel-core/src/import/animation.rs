@@ -5,6 +5,7 @@
 //! animation data (a sampler whose output does not match its input, a non-scalar time accessor, joint indices
 //! out of range, float JOINTS, morph targets of the wrong length, a node with two parents…) is an error
 //! naming the animation, skin or mesh: the caller still has [`crate::load_file`] for the static pose.
+//! A skin's `skeleton` is only a hint in glTF (the joints' common root) and posing does not need it.
 
 use std::collections::HashMap;
 use std::path::Path;
