@@ -5,7 +5,6 @@
 //! with other builds inflates far less than wall time. Words after `--` keep only the models whose path
 //! contains one of them (`-- fox`).
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use voxel_core::{TriangleSoup, VoxelizeOptions, load_animated_file, voxelize_within};
@@ -20,11 +19,8 @@ const MODELS: &[&str] = &[
 /// Frames timed per clip: the clip sampled at this many evenly spaced times.
 const FRAMES: usize = 60;
 
-fn models_dir() -> PathBuf {
-    std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
-}
+#[path = "../tests/support/models.rs"]
+mod models;
 
 /// Nanoseconds this process's threads have run on a CPU (Linux), `None` elsewhere.
 fn cpu_ns() -> Option<u64> {
@@ -41,7 +37,7 @@ fn median(mut times: Vec<f64>) -> f64 {
 }
 
 fn main() {
-    let dir = models_dir();
+    let Some(dir) = models::models_dir() else { return };
     println!("threads: {}", rayon::current_num_threads());
     println!("| model | clip | triangles | grid | pose ms | voxelize ms | pose + voxelize ms | CPU ms / frame |");
     println!("|---|---|---:|---|---:|---:|---:|---:|");
