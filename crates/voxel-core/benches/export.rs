@@ -4,7 +4,6 @@
 //! the greedy meshing alone) of 30 runs, as a
 //! Markdown table. The Duck's export has a budget of 50 ms.
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use voxel_core::export::ExportOptions;
@@ -12,14 +11,11 @@ use voxel_core::export::gltf::to_glb;
 use voxel_core::export::mesh::surface;
 use voxel_core::{GridSize, VoxelizeOptions, load_file, voxelize};
 
+#[path = "../tests/support/models.rs"]
+mod models;
+
 const RUNS: usize = 30;
 const DUCK_BUDGET_MS: f64 = 50.0;
-
-fn models_dir() -> PathBuf {
-    std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
-}
 
 /// The median of `times`.
 fn median(mut times: Vec<f64>) -> f64 {
@@ -50,7 +46,7 @@ fn time<T>(mut f: impl FnMut() -> T) -> (f64, f64) {
 }
 
 fn main() {
-    let dir = models_dir();
+    let Some(dir) = models::models_dir() else { return };
     println!(
         "| model | R | grid | voxels | faces | triangles before | rectangles | triangles after | .glb bytes | export ms: median wall (mean CPU) | of which meshing |"
     );

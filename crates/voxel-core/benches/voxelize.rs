@@ -2,16 +2,13 @@
 //! R = 32, 64, 128, 256 with the fast method (solid + shell + colour), the BVH column method at R = 128,
 //! and the article's reference at R = 32 and 64, then prints a Markdown table (median of several runs).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use voxel_core::{GridSize, Method, TriangleSoup, VoxelizeOptions, load_file, voxelize};
 
-fn models_dir() -> PathBuf {
-    std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
-}
+#[path = "../tests/support/models.rs"]
+mod models;
 
 /// Median wall time in ms of `runs` voxelizations, and the voxel count.
 fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize) {
@@ -29,7 +26,7 @@ fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize
 }
 
 fn main() {
-    let dir = models_dir();
+    let Some(dir) = models::models_dir() else { return };
     let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(std::slice::from_ref(&dir));
     for sub in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
         if sub.path().is_dir() {

@@ -47,13 +47,25 @@ impl GridSpec {
         height_ratio: f32,
         max_cells: u64,
     ) -> Result<Self> {
+        let bounds = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
+        Self::fit_bounds(bounds, model_size, size, height_ratio, max_cells)
+    }
+
+    /// Fits a grid around the box `bounds` (min, max) as [`GridSpec::fit`] does around a soup's bounds: for
+    /// a fixed grid over every pose of an animation.
+    pub fn fit_bounds(
+        (lo, hi): ([f32; 3], [f32; 3]),
+        model_size: f32,
+        size: GridSize,
+        height_ratio: f32,
+        max_cells: u64,
+    ) -> Result<Self> {
         if !(model_size.is_finite() && model_size > 0.0) {
             return Err(VoxelError::Parameter(format!("model size must be positive, got {model_size}")));
         }
         if !(height_ratio.is_finite() && (0.1..=10.0).contains(&height_ratio)) {
             return Err(VoxelError::Parameter(format!("cell height ratio must be in 0.1..=10, got {height_ratio}")));
         }
-        let (lo, hi) = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
         let lo = DVec3::from(lo.map(f64::from));
         let hi = DVec3::from(hi.map(f64::from));
         let diag = (hi - lo).length();

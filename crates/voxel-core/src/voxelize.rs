@@ -146,11 +146,23 @@ impl VoxelModel {
 
 /// Voxelizes `soup` with `options`.
 pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
+    voxelize_within(soup, options, soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?)
+}
+
+/// Voxelizes `soup` in the grid fitted to `bounds` (min, max) instead of the soup's own bounds, so that
+/// every pose of an animation lands in the same cells ([`crate::AnimatedModel::clip_bounds`]). Parts of
+/// the soup outside `bounds` are clipped at the grid's edge.
+pub fn voxelize_within(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<VoxelModel> {
     soup.validate()?;
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
     }
-    let spec = GridSpec::fit(soup, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let spec =
+        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
     let tris = spec.grid_triangles(soup);
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
