@@ -1,8 +1,10 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod colors;
 mod common;
 mod corpus;
 mod errors;
 mod export;
+mod scale;
 mod shapes;
