@@ -3,7 +3,8 @@
 //! and the article's reference at R = 32 and 64, then prints a Markdown table (median of several runs).
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- passes` instead prints the time of the fill, shell and
-//! colour passes per model at R = 64 and 128 (medians of 7 runs), plus a cube under a node scale of 0.1.
+//! colour passes per model at R = 64 and 128 (medians of 7 runs), plus a cube under a node scale of 0.1 and
+//! an open cube.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -85,6 +86,11 @@ fn main() {
         }
         let cube = TriangleSoup::from_mesh(&cuboid([-0.1; 3], [0.1; 3]), [1.0; 4]);
         print_passes("cube ±0.1 (a ±1 cube under node scale 0.1), built", &cube, 7);
+        // Without its +x face: the middle of that side is far from every triangle (the colour's BVH query).
+        let mut open = cuboid([-1.0; 3], [1.0; 3]);
+        let positions = open.positions.clone();
+        open.triangles.retain(|t| !t.iter().all(|&i| positions[i as usize][0] == 1.0));
+        print_passes("cube without its +x face, built", &TriangleSoup::from_mesh(&open, [1.0; 4]), 7);
         return;
     }
     println!(

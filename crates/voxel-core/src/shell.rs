@@ -7,6 +7,9 @@ use rayon::prelude::*;
 use crate::geom::{BoxTester, GridTriangle};
 use crate::grid::{BitGrid, GridSpec};
 
+mod octree;
+pub(crate) use octree::ShellOctree;
+
 /// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
 #[derive(Debug, Default)]
 pub(crate) struct Shell {

@@ -13,7 +13,7 @@ use crate::error::{Result, VoxelError};
 use crate::fill::{crossings_by_bvh, crossings_by_rasterizing, fill_columns, reachable_from_outside, reference_fill};
 use crate::geom::{GridTriangle, closest_point_barycentric, distance2};
 use crate::grid::{BitGrid, GridSize, GridSpec};
-use crate::shell::{Shell, shell};
+use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
 
 /// How the inside of the model is found.
@@ -156,7 +156,7 @@ pub struct PassTimes {
     pub fill: Duration,
     /// The surface shell.
     pub shell: Duration,
-    /// The colours of the visible cells (including a BVH built for them).
+    /// The colours of the visible cells.
     pub color: Duration,
 }
 
@@ -282,9 +282,12 @@ fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item
 
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
-/// face lies), else of the whole model (a BVH nearest query, built on first use: cells that far from the
-/// surface only occur where an open mesh leaves a column unmatched, so the cost stays bounded by the
-/// queries, never a scan of the grid or of every triangle per cell).
+/// face lies), else of the whole model. Cells that far from the surface only occur where an open mesh leaves
+/// a column unmatched; for them one index is built, outside the parallel loop, and each lookup walks the
+/// part of it near its cell: a BVH over the triangles when they are fewer than the shell cells (a big
+/// triangle spans many cells, whose boxes bound it loosely), else an octree over the shell cells (built in
+/// time linear in the shell, where a BVH over many small triangles would cost more to build than the shell).
+/// Both give the nearest triangle of nonzero area, ties to the lower index.
 fn surface_colors(
     soup: &TriangleSoup,
     spec: &GridSpec,
@@ -293,26 +296,41 @@ fn surface_colors(
     visible: &[u32],
     bvh: &OnceLock<TriangleBvh>,
 ) -> Vec<([u8; 4], u32)> {
-    visible
+    let centre = |i: u32| {
+        let c = spec.coords(i as usize);
+        DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
+    };
+    let shell_triangles = |cell: usize| shell.triangles_of(cell).iter().map(|&t| t as usize);
+    let mut nearest: Vec<Option<usize>> = visible
         .par_iter()
         .map(|&i| {
-            let i = i as usize;
-            let c = spec.coords(i);
-            let p = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-            let own = shell.triangles_of(i).iter().map(|&t| t as usize);
-            let tri = nearest_among(tris, p, own)
-                .or_else(|| {
-                    let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i, step));
-                    nearest_among(tris, p, faces.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize)))
-                })
-                .or_else(|| {
-                    let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
-                    bvh.nearest(p, |t| distance2(p, &tris[t])).map(|n| n.0)
-                });
-            match tri {
-                Some(t) => (sample(soup, t, closest_point_barycentric(p, &tris[t])), soup.triangle_parts[t]),
-                None => ([255; 4], 0),
-            }
+            let p = centre(i);
+            nearest_among(tris, p, shell_triangles(i as usize)).or_else(|| {
+                let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
+                nearest_among(tris, p, faces.flat_map(shell_triangles))
+            })
+        })
+        .collect();
+    if nearest.contains(&None) {
+        let far: Box<dyn Fn(DVec3) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
+            let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
+            let has_area = |t: &GridTriangle| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0;
+            Box::new(move |p| {
+                let d2 = |t: usize| if has_area(&tris[t]) { distance2(p, &tris[t]) } else { f64::INFINITY };
+                bvh.nearest(p, d2).filter(|n| n.1.is_finite()).map(|n| n.0)
+            })
+        } else {
+            let octree = ShellOctree::new(spec, shell);
+            Box::new(move |p| octree.nearest(tris, p))
+        };
+        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| *t = far(centre(i)));
+    }
+    visible
+        .par_iter()
+        .zip(&nearest)
+        .map(|(&i, &t)| match t {
+            Some(t) => (sample(soup, t, closest_point_barycentric(centre(i), &tris[t])), soup.triangle_parts[t]),
+            None => ([255; 4], 0),
         })
         .collect()
 }
