@@ -13,11 +13,8 @@ use voxel_core::shapes::cuboid;
 use voxel_core::voxelize::{PassTimes, voxelize_timed};
 use voxel_core::{GridSize, Method, TriangleSoup, VoxelizeOptions, load_file, voxelize};
 
-fn models_dir() -> PathBuf {
-    std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
-}
+#[path = "../tests/support/models.rs"]
+mod models;
 
 /// Median wall time in ms of `runs` voxelizations, and the voxel count.
 fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize) {
@@ -69,7 +66,7 @@ fn corpus(dir: &Path) -> Vec<PathBuf> {
 }
 
 fn main() {
-    let dir = models_dir();
+    let Some(dir) = models::models_dir() else { return };
     let files = corpus(&dir);
     if files.is_empty() {
         println!("no models found in {} (set VOXEL_ART_MODELS)", dir.display());

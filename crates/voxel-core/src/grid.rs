@@ -76,9 +76,10 @@ fn snap(v: DVec3, quantum: f64) -> DVec3 {
 
 /// The snapping step for a model whose coordinates reach `reach` cells from the world origin: the f32 noise of
 /// a coordinate is about 2⁻²⁴ of it (f32 node rotations add a few times that) and the step is 48–96 times
-/// that, at most 1/64 cell (beyond that the model sits so far from the origin that f32 cannot place it). The exponent is taken of 1.5 · `reach` so that a model centred on the origin
-/// (reach = half its cell count, a multiple of ½) never sits on a step of the power of two, where rounding
-/// noise could pick either of two quanta for two copies of one shape.
+/// that, at most 1/64 cell (beyond that the model sits so far from the origin that f32 cannot place it).
+/// The exponent is taken of 1.5 · `reach` so that a model centred on the origin (reach = half its cell count,
+/// a multiple of ½) never sits on a step of the power of two, where rounding noise could pick either of two
+/// quanta for two copies of one shape.
 fn snap_quantum(reach: f64) -> f64 {
     let exponent = (1.5 * reach).log2().floor().clamp(-40.0, 12.0) as i32;
     2f64.powi(exponent - 18)
@@ -94,13 +95,25 @@ impl GridSpec {
         height_ratio: f32,
         max_cells: u64,
     ) -> Result<Self> {
+        let bounds = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
+        Self::fit_bounds(bounds, model_size, size, height_ratio, max_cells)
+    }
+
+    /// Fits a grid around the box `bounds` (min, max) as [`GridSpec::fit`] does around a soup's bounds: for
+    /// a fixed grid over every pose of an animation.
+    pub fn fit_bounds(
+        (lo, hi): ([f32; 3], [f32; 3]),
+        model_size: f32,
+        size: GridSize,
+        height_ratio: f32,
+        max_cells: u64,
+    ) -> Result<Self> {
         if !(model_size.is_finite() && model_size > 0.0) {
             return Err(VoxelError::Parameter(format!("model size must be positive, got {model_size}")));
         }
         if !(height_ratio.is_finite() && (0.1..=10.0).contains(&height_ratio)) {
             return Err(VoxelError::Parameter(format!("cell height ratio must be in 0.1..=10, got {height_ratio}")));
         }
-        let (lo, hi) = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
         let lo = DVec3::from(lo.map(f64::from));
         let hi = DVec3::from(hi.map(f64::from));
         let diag = (hi - lo).length();

@@ -149,6 +149,17 @@ pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelM
     voxelize_timed(soup, options).map(|(model, _)| model)
 }
 
+/// Voxelizes `soup` in the grid fitted to `bounds` (min, max) instead of the soup's own bounds, so that
+/// every pose of an animation lands in the same cells ([`crate::AnimatedModel::clip_bounds`]). Parts of
+/// the soup outside `bounds` are clipped at the grid's edge.
+pub fn voxelize_within(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<VoxelModel> {
+    voxelize_within_timed(soup, options, bounds).map(|(model, _)| model)
+}
+
 /// The wall time of the passes of one voxelization (for benchmarks).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PassTimes {
@@ -162,12 +173,22 @@ pub struct PassTimes {
 
 /// [`voxelize`], also reporting how long its passes took.
 pub fn voxelize_timed(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<(VoxelModel, PassTimes)> {
+    voxelize_within_timed(soup, options, soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?)
+}
+
+/// [`voxelize_within`], also reporting how long its passes took.
+fn voxelize_within_timed(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<(VoxelModel, PassTimes)> {
     soup.validate()?;
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
     }
     let started = Instant::now();
-    let spec = GridSpec::fit(soup, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let spec =
+        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
     let tris = spec.grid_triangles(soup);
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));

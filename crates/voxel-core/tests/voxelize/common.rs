@@ -3,21 +3,11 @@
 use std::collections::HashSet;
 use std::path::PathBuf;
 
-use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
+#[path = "../support/models.rs"]
+mod models;
+pub use models::models_dir;
 
-/// The folder of third-party test models, or `None` (with the reason printed) when absent.
-/// `VOXEL_ART_MODELS` overrides the default `../shared/models` next to the repository.
-pub fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: test models not found at {} (set VOXEL_ART_MODELS)", dir.display());
-        None
-    }
-}
+use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
 
 /// A model of the corpus by relative path, or `None` when the corpus is absent.
 pub fn model(relative: &str) -> Option<PathBuf> {

@@ -1,6 +1,7 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod animation;
 mod colors;
 mod common;
 mod corpus;

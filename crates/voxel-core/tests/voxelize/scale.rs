@@ -1,7 +1,8 @@
 //! The same shape under any node scale or translation gives the same cells: faces that lie on cell
 //! boundaries up to f32 rounding are decided alike for every copy.
 
-use voxel_core::{FillMode, ShellMode, VoxelModel, VoxelStats, VoxelizeOptions, load_slice, voxelize};
+use voxel_core::shapes::cuboid;
+use voxel_core::{FillMode, ShellMode, TriangleSoup, VoxelModel, VoxelStats, VoxelizeOptions, load_slice, voxelize};
 
 use crate::common::{at_resolution, cube_document, cuboid_buffer, glb};
 
@@ -81,6 +82,39 @@ fn a_rotated_non_uniformly_scaled_box_gives_the_cells_of_the_same_box_built_axis
                 let m = voxelize_box([-1.0, -1.0, -0.5], [1.0, 1.0, 0.5], trs, &options);
                 assert_eq!(m.spec.dims, reference.spec.dims, "{what} R={r} scale {s}");
                 assert_eq!(outcome(&m), expected, "{what} R={r} scale {s}");
+            }
+        }
+    }
+}
+
+#[test]
+fn boxes_with_faces_on_inner_cell_boundaries_get_exactly_their_cells_at_any_scale() {
+    // A = [-1, 1]³ and B = [3, 4] × [1.5, 2]² span a grid of 20 × 12 × 12 cells of ¼ at R=20; every face lies
+    // on a cell boundary inside the grid, where the shell must not reach across the edges into the cells
+    // beyond (they would join the solid as thin surface): parity gives exactly the boxes' 8³ + 4·2·2 cells.
+    let r = 20;
+    let boxes = |s: f32, offset: [f32; 3]| {
+        let place = |mut mesh: voxel_core::shapes::IndexedMesh| {
+            for p in &mut mesh.positions {
+                *p = std::array::from_fn(|a| p[a] * s + offset[a] * s);
+            }
+            mesh
+        };
+        let mut soup = TriangleSoup::from_mesh(&place(cuboid([-1.0; 3], [1.0; 3])), [1.0; 4]);
+        soup.add_mesh(&place(cuboid([3.0, 1.5, 1.5], [4.0, 2.0, 2.0])), [1.0; 4], "b");
+        soup
+    };
+    for (what, options) in option_sets(r) {
+        let reference = voxelize(&boxes(1.0, [0.0; 3]), &options).unwrap();
+        assert_eq!(reference.spec.dims, [20, 12, 12]);
+        if options.fill != FillMode::Flood {
+            assert_eq!((reference.stats.voxels, reference.stats.visible), (8 * 8 * 8 + 16, 8 * 8 * 8 - 6 * 6 * 6 + 16));
+        }
+        let expected = outcome(&reference);
+        for s in SCALES {
+            for offset in [[0.0; 3], [3.7, -1.3, 12.0]] {
+                let m = voxelize(&boxes(s, offset), &options).unwrap();
+                assert_eq!(outcome(&m), expected, "{what} scale {s} moved {offset:?}");
             }
         }
     }
