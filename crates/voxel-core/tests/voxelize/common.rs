@@ -31,7 +31,13 @@ pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
 
 /// A unit cube (8 positions, 36 u16 indices) as little-endian bytes, positions first.
 pub fn cube_buffer() -> (Vec<u8>, usize, usize) {
-    let mesh = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
+    cuboid_buffer([0.0; 3], [1.0; 3])
+}
+
+/// The box from `lo` to `hi` (8 positions, 36 u16 indices) as little-endian bytes, positions first, with the
+/// byte length of the positions and the index count.
+pub fn cuboid_buffer(lo: [f32; 3], hi: [f32; 3]) -> (Vec<u8>, usize, usize) {
+    let mesh = voxel_core::shapes::cuboid(lo, hi);
     let mut bin = Vec::new();
     for p in &mesh.positions {
         for c in p {

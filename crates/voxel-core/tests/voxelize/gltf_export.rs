@@ -73,7 +73,6 @@ fn round_trip(name: &str, model: &VoxelModel) -> Result<(), String> {
 }
 
 #[test]
-#[ignore = "needs the grid snapping of the shellscale branch: f32 rounding of the read-back faces, which lie on cell boundaries, adds a cell or moves a face out of its cell"]
 fn corpus_models_round_trip_through_glb() {
     let mut failures = Vec::new();
     for name in CLOSED.iter().chain(OTHERS) {
@@ -85,7 +84,6 @@ fn corpus_models_round_trip_through_glb() {
 }
 
 #[test]
-#[ignore = "needs the grid snapping of the shellscale branch: f32 rounding of the read-back faces, which lie on cell boundaries, adds a cell or moves a face out of its cell"]
 fn the_duck_round_trips_at_r128_and_with_lego_cells() {
     let Some(path) = model("khronos-duck.glb") else { return };
     let soup = load_file(&path).unwrap();
@@ -95,7 +93,6 @@ fn the_duck_round_trips_at_r128_and_with_lego_cells() {
 }
 
 #[test]
-#[ignore = "needs the grid snapping of the shellscale branch: f32 rounding of the read-back faces, which lie on cell boundaries, adds a cell or moves a face out of its cell"]
 fn generated_shapes_round_trip_through_glb() {
     let mut parts = TriangleSoup::default();
     parts.add_mesh(&cuboid([-1.0, -1.0, -1.0], [1.0, 0.2, 1.0]), [0.9, 0.1, 0.1, 1.0], "block");

@@ -2,9 +2,11 @@
 //! hostile input and .vox export. One test binary.
 
 mod animation;
+mod colors;
 mod common;
 mod corpus;
 mod errors;
 mod export;
 mod gltf_export;
+mod scale;
 mod shapes;
