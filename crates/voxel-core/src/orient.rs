@@ -472,19 +472,20 @@ fn exposed_parts(columns: &Columns, roles: &[Role], part_of: &[u32], inward: &[b
 mod tests {
     use super::*;
     use crate::fill::crossings_by_rasterizing;
-    use crate::grid::GridSpec;
+    use crate::grid::{GridSize, GridSpec};
     use crate::shapes::{IndexedMesh, cuboid};
-
-    /// The tests' meshes are given in grid coordinates, inside a 4 × 4 × 4 grid.
-    const SPEC: GridSpec = GridSpec { dims: [4; 3], cell: [1.0; 3], origin: [0.0; 3], scale: 1.0, center: [0.0; 3] };
+    use crate::soup::TriangleSoup;
 
     fn grid_tris(mesh: &IndexedMesh) -> Vec<GridTriangle> {
         mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect()
     }
 
+    /// The roles of `mesh`'s triangles, voxelized in a 4 × 4 × 4 grid around it.
     fn roles(mesh: &IndexedMesh) -> Vec<Role> {
-        let tris = grid_tris(mesh);
-        winding_roles(&tris, None, || crossings_by_rasterizing(&SPEC, &tris))
+        let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(4), 1.0, 1 << 20).unwrap();
+        let tris = spec.grid_triangles(&soup);
+        winding_roles(&tris, None, || crossings_by_rasterizing(&spec, &tris))
     }
 
     fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {

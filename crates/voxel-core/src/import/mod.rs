@@ -5,6 +5,7 @@
 //! require an extension we cannot decode (Draco, meshopt) are refused with an error naming it.
 
 mod accessor;
+mod animation;
 mod materials;
 
 use std::collections::HashMap;
@@ -17,6 +18,8 @@ use crate::error::{Result, VoxelError};
 use crate::soup::{TriangleSoup, Vertex};
 
 use materials::MaterialCache;
+
+pub use animation::{load_animated_file, load_animated_slice};
 
 /// Required extensions we understand (or that do not change geometry or base colour).
 const TOLERATED_REQUIRED: &[&str] = &[
@@ -47,6 +50,24 @@ pub fn load_file(path: &Path) -> Result<TriangleSoup> {
 
 /// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
 pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
+    import_with(bytes, base_dir, |_, builder| Ok(builder.soup))
+}
+
+/// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
+struct PartSource {
+    node: usize,
+    mesh: usize,
+    decoded: usize,
+    first_vertex: usize,
+}
+
+/// Imports the soup, then hands the document and the builder (the soup and what it was decoded from) to
+/// `finish`.
+fn import_with<T>(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
+) -> Result<T> {
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
     let document = validate(document)?;
@@ -57,18 +78,18 @@ pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup>
         materials: MaterialCache::new(base_dir),
         buffers: &buffers,
         parts_of_mesh: HashMap::new(),
+        instances: Vec::new(),
     };
     for (node, transform) in scene_instances(&document)? {
         if let Some(mesh) = node.mesh() {
-            builder.add_mesh(&mesh, &transform)?;
+            builder.add_mesh(node.index(), &mesh, &transform)?;
         }
     }
-    let soup = builder.soup;
-    if soup.triangle_count() == 0 {
+    if builder.soup.triangle_count() == 0 {
         return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
     }
-    soup.validate()?;
-    Ok(soup)
+    builder.soup.validate()?;
+    finish(&document, builder)
 }
 
 fn describe_parse_error(e: gltf::Error) -> VoxelError {
@@ -163,10 +184,14 @@ struct SoupBuilder<'a> {
     buffers: &'a [gltf::buffer::Data],
     /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
     parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
+    /// Where each part came from.
+    instances: Vec<PartSource>,
 }
 
 /// One primitive's triangles in mesh space with their attributes.
 struct DecodedPrimitive {
+    /// The glTF primitive index within its mesh.
+    primitive: usize,
     material: usize,
     name: String,
     positions: Vec<[f32; 3]>,
@@ -176,7 +201,7 @@ struct DecodedPrimitive {
 }
 
 impl SoupBuilder<'_> {
-    fn add_mesh(&mut self, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
+    fn add_mesh(&mut self, node: usize, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
         if !self.parts_of_mesh.contains_key(&mesh.index()) {
             let mut decoded = Vec::new();
             for prim in mesh.primitives() {
@@ -191,7 +216,9 @@ impl SoupBuilder<'_> {
         if self.soup.triangle_count() + added > MAX_TRIANGLES {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
-        for prim in prims {
+        for (decoded, prim) in prims.iter().enumerate() {
+            let first_vertex = self.soup.vertices.len();
+            self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world: Vec<[f32; 3]> = prim
                 .positions
@@ -266,6 +293,7 @@ impl SoupBuilder<'_> {
             None => None,
         };
         Ok(Some(DecodedPrimitive {
+            primitive: prim.index(),
             material: soup_material,
             name,
             positions,

@@ -1,9 +1,13 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod animation;
+mod colors;
 mod common;
 mod corpus;
 mod errors;
 mod export;
+mod gltf_export;
+mod scale;
 mod shapes;
 mod winding;
