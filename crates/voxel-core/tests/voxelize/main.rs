@@ -2,6 +2,7 @@
 //! hostile input and .vox export. One test binary.
 
 mod common;
+mod compressed;
 mod corpus;
 mod errors;
 mod export;
