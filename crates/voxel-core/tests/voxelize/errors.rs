@@ -262,3 +262,20 @@ fn gltf_1_is_named() {
     glb_v1[4..8].copy_from_slice(&1u32.to_le_bytes());
     assert!(load_err(&glb_v1).contains(message));
 }
+
+#[test]
+fn damaged_draco_streams_are_named() {
+    let draco = |view: u32| {
+        cube_glb(move |doc, _| {
+            doc["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+            doc["meshes"][0]["primitives"][0]["extensions"] = serde_json::json!({
+                "KHR_draco_mesh_compression": {"bufferView": view, "attributes": {"POSITION": 0}}
+            });
+        })
+    };
+    // The cube's raw positions are no Draco stream.
+    let err = load_err(&draco(0));
+    assert!(err.contains("mesh 0 primitive 0 (KHR_draco_mesh_compression): cannot decode"), "{err}");
+    let err = load_err(&draco(9));
+    assert!(err.contains("(KHR_draco_mesh_compression): buffer view 9 does not exist"), "{err}");
+}

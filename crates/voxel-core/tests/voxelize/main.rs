@@ -6,4 +6,5 @@ mod compressed;
 mod corpus;
 mod errors;
 mod export;
+mod meshopt;
 mod shapes;
