@@ -23,7 +23,7 @@ struct Packed {
 
 fn unit_cube() -> (Vec<[f32; 3]>, Vec<u32>) {
     let mesh = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
-    (mesh.positions.clone(), mesh.triangles.iter().flatten().map(|&i| i as u32).collect())
+    (mesh.positions, mesh.triangles.into_iter().flatten().collect())
 }
 
 /// The unit cube with EXPONENTIAL positions, OCTAHEDRAL normals and `index_mode` indices (TRIANGLES or
