@@ -7,6 +7,9 @@ use gltf::buffer::View;
 use super::buffers::Buffers;
 use crate::error::{Result, VoxelError};
 
+/// The most values an accessor without a buffer view (all zeros, or a sparse base) may have.
+const MAX_ZEROS: usize = 1 << 26;
+
 /// Number of components of an accessor element.
 pub(crate) fn component_count(dims: Dimensions) -> usize {
     match dims {
@@ -95,6 +98,12 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers, what: &s
     }
     let mut values = match accessor.view() {
         Some(view) => read_strided(&view, buffers, accessor.offset(), count, ncomp, ty, normalized, what)?,
+        // No data backs these zeros, so their number is bounded here rather than by the file's size.
+        None if count * ncomp > MAX_ZEROS => {
+            return Err(VoxelError::Invalid(format!(
+                "{what}: accessor of {count} elements without a buffer view is too large"
+            )));
+        }
         None => vec![0.0; count * ncomp],
     };
     if let Some(sparse) = accessor.sparse() {

@@ -14,7 +14,7 @@ use crate::error::{Result, VoxelError};
 const MESHOPT: &str = "EXT_meshopt_compression";
 
 /// The most bytes one meshopt buffer view may decode to (a guard against absurd counts in hostile files).
-const MAX_DECODED_VIEW: usize = 1 << 30;
+const MAX_DECODED_VIEW: usize = 1 << 29;
 
 /// The buffers of a document and the decoded bytes of its meshopt-compressed views.
 pub(crate) struct Buffers {

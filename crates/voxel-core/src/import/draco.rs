@@ -16,6 +16,12 @@ use crate::error::{Result, VoxelError};
 /// The extension's name.
 pub(crate) const DRACO: &str = "KHR_draco_mesh_compression";
 
+/// The most points one Draco primitive may decode to (attributes are read per point, whatever the stream).
+const MAX_POINTS: usize = 1 << 24;
+
+/// The most components of an attribute we read (POSITION, TEXCOORD_n and COLOR_0 have 2 to 4).
+const MAX_COMPONENTS: usize = 4;
+
 /// The extension object of a primitive.
 #[derive(Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -48,7 +54,7 @@ impl DracoPrimitive {
             .ok_or_else(|| invalid(format!("buffer view {} does not exist", ext.buffer_view)))?;
         let limits = DecodeLimits::default()
             .with_max_faces(MAX_TRIANGLES as u64)
-            .with_max_points(3 * MAX_TRIANGLES as u64)
+            .with_max_points(MAX_POINTS as u64)
             .with_max_decoded_bytes(1 << 30);
         let mut stream = DecoderBuffer::new(buffers.view_bytes(&view, what)?).with_limits(limits);
         let mut mesh = Mesh::new();
@@ -70,6 +76,9 @@ impl DracoPrimitive {
             .attribute_by_unique_id(id)
             .ok_or_else(|| VoxelError::Invalid(format!("{what} ({DRACO}): the Draco stream has no attribute {id}")))?;
         let ncomp = component_count(accessor.dimensions());
+        if ncomp > MAX_COMPONENTS {
+            return Err(VoxelError::Invalid(format!("{what} ({DRACO}): {ncomp} components per element")));
+        }
         if usize::from(attribute.num_components()) != ncomp {
             return Err(VoxelError::Invalid(format!(
                 "{what} ({DRACO}): the Draco attribute has {} components, the accessor {ncomp}",

@@ -279,3 +279,11 @@ fn damaged_draco_streams_are_named() {
     let err = load_err(&draco(9));
     assert!(err.contains("(KHR_draco_mesh_compression): buffer view 9 does not exist"), "{err}");
 }
+
+#[test]
+fn a_huge_accessor_without_data_is_refused_before_allocating() {
+    let err = load_err(&cube_glb(|doc, _| {
+        doc["accessors"][0] = serde_json::json!({"componentType": 5126, "count": 1 << 25, "type": "VEC3"});
+    }));
+    assert!(err.contains("accessor of 33554432 elements without a buffer view is too large"), "{err}");
+}
