@@ -44,6 +44,13 @@ fn is_gltf1(json: &serde_json::Value) -> bool {
 
 /// Parses glTF or GLB bytes without the `gltf` crate's validation (see [`check`]).
 pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf> {
+    // The gltf crate subtracts the 12-byte header from the GLB's declared length unchecked.
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
+        let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+        if length < 12 {
+            return Err(VoxelError::Parse(format!("corrupt GLB (its header declares a length of {length} bytes)")));
+        }
+    }
     match gltf::Gltf::from_slice_without_validation(bytes) {
         Ok(gltf) => {
             let version = &gltf.document.as_json().asset.version;

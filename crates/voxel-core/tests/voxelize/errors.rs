@@ -287,3 +287,11 @@ fn a_huge_accessor_without_data_is_refused_before_allocating() {
     }));
     assert!(err.contains("accessor of 33554432 elements without a buffer view is too large"), "{err}");
 }
+
+#[test]
+fn a_glb_declaring_less_than_its_header_is_named() {
+    // Found by the fuzz target: gltf 1.4.1 binary.rs:252 subtracts the header size from this length unchecked.
+    let mut bytes = cube_glb(|_, _| {});
+    bytes[8..12].copy_from_slice(&5u32.to_le_bytes());
+    assert!(load_err(&bytes).contains("corrupt GLB (its header declares a length of 5 bytes)"));
+}
