@@ -295,3 +295,14 @@ fn a_glb_declaring_less_than_its_header_is_named() {
     bytes[8..12].copy_from_slice(&5u32.to_le_bytes());
     assert!(load_err(&bytes).contains("corrupt GLB (its header declares a length of 5 bytes)"));
 }
+
+#[test]
+fn position_bounds_are_optional() {
+    // glTF requires POSITION min/max, but nothing here uses them; exporters that omit them still load.
+    let bytes = cube_glb(|doc, _| {
+        let accessor = doc["accessors"][0].as_object_mut().unwrap();
+        accessor.remove("min");
+        accessor.remove("max");
+    });
+    assert_eq!(load_slice(&bytes, None).unwrap().triangle_count(), 12);
+}
