@@ -1,17 +1,20 @@
 //! `cargo bench -p voxel-core`: voxelizes every model of ../shared/models (or `VOXEL_ART_MODELS`) at
 //! R = 32, 64, 128, 256 with the fast method (solid + shell + colour), the BVH column method at R = 128,
 //! and the article's reference at R = 32 and 64, then prints a Markdown table (median of several runs).
+//!
+//! `cargo bench -p voxel-core --bench voxelize -- passes` instead prints the time of the fill, shell and
+//! colour passes per model at R = 64 and 128 (medians of 7 runs), plus a cube under a node scale of 0.1 and
+//! an open cube.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use voxel_core::shapes::cuboid;
+use voxel_core::voxelize::{PassTimes, voxelize_timed};
 use voxel_core::{GridSize, Method, TriangleSoup, VoxelizeOptions, load_file, voxelize};
 
-fn models_dir() -> PathBuf {
-    std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"))
-}
+#[path = "../tests/support/models.rs"]
+mod models;
 
 /// Median wall time in ms of `runs` voxelizations, and the voxel count.
 fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize) {
@@ -28,20 +31,65 @@ fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize
     (times[times.len() / 2], voxels)
 }
 
-fn main() {
-    let dir = models_dir();
-    let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(std::slice::from_ref(&dir));
-    for sub in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+/// The median of `values` in ms.
+fn median_ms(mut values: Vec<Duration>) -> f64 {
+    values.sort();
+    values[values.len() / 2].as_secs_f64() * 1e3
+}
+
+/// Prints one row per resolution: the median fill, shell and colour pass times of `runs` voxelizations.
+fn print_passes(name: &str, soup: &TriangleSoup, runs: usize) {
+    for r in [64, 128] {
+        let options = VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() };
+        let timed: Vec<_> = (0..runs).map(|_| voxelize_timed(soup, &options).expect("voxelize")).collect();
+        let visible = timed[0].0.stats.visible;
+        let passes: [fn(&PassTimes) -> Duration; 3] = [|t| t.fill, |t| t.shell, |t| t.color];
+        let [fill, shell, color] = passes.map(|pass| median_ms(timed.iter().map(|(_, t)| pass(t)).collect()));
+        println!(
+            "| {name} | {} | {r} | {visible} | {fill:.2} | {shell:.2} | {color:.2} | {:.2} |",
+            soup.triangle_count(),
+            color / shell
+        );
+    }
+}
+
+/// The models of the corpus folder and its subfolders, sorted.
+fn corpus(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(&[dir.to_path_buf()]);
+    for sub in std::fs::read_dir(dir).into_iter().flatten().flatten() {
         if sub.path().is_dir() {
             files.extend(voxel_core::cli::expand_inputs(&[sub.path()]));
         }
     }
     files.sort();
+    files
+}
+
+fn main() {
+    let Some(dir) = models::models_dir() else { return };
+    let files = corpus(&dir);
     if files.is_empty() {
         println!("no models found in {} (set VOXEL_ART_MODELS)", dir.display());
         return;
     }
     println!("threads: {}", rayon::current_num_threads());
+    if std::env::args().skip(1).any(|a| a == "passes") {
+        println!("| model | triangles | R | visible | fill ms | shell ms | colour ms | colour / shell |");
+        println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+        for file in &files {
+            if let Ok(soup) = load_file(file) {
+                print_passes(&file.strip_prefix(&dir).unwrap_or(file).display().to_string(), &soup, 7);
+            }
+        }
+        let cube = TriangleSoup::from_mesh(&cuboid([-0.1; 3], [0.1; 3]), [1.0; 4]);
+        print_passes("cube ±0.1 (a ±1 cube under node scale 0.1), built", &cube, 7);
+        // Without its +x face: the middle of that side is far from every triangle (the colour's BVH query).
+        let mut open = cuboid([-1.0; 3], [1.0; 3]);
+        let positions = open.positions.clone();
+        open.triangles.retain(|t| !t.iter().all(|&i| positions[i as usize][0] == 1.0));
+        print_passes("cube without its +x face, built", &TriangleSoup::from_mesh(&open, [1.0; 4]), 7);
+        return;
+    }
     println!(
         "| model | triangles | load ms | R | voxels | fast ms | bvh-column ms | reference ms | reference / fast |"
     );

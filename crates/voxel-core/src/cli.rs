@@ -78,6 +78,16 @@ struct Args {
     /// Largest accepted grid in cells (memory guard).
     #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
     max_cells: u64,
+    /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
+    /// --out is then a folder of <name>-<frame>.vox files.
+    #[arg(long)]
+    animation: Option<String>,
+    /// Frames per second of --animation.
+    #[arg(long, default_value_t = 12.0, requires = "animation")]
+    fps: f32,
+    /// Seconds of --animation to voxelize (default: one clip length).
+    #[arg(long, requires = "animation")]
+    duration: Option<f32>,
 }
 
 impl Args {
@@ -165,6 +175,16 @@ fn vox_path(out: &Path, input: &Path, several: bool) -> PathBuf {
 }
 
 fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -> Result<String> {
+    if let Some(animation) = &args.animation {
+        let request = crate::cli_animation::ClipRequest {
+            animation,
+            fps: args.fps,
+            duration: args.duration,
+            out: args.out.as_deref(),
+            json: args.json,
+        };
+        return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
+    }
     let t0 = Instant::now();
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;

@@ -161,6 +161,11 @@ pub fn point_at(t: &GridTriangle, w: [f64; 3]) -> DVec3 {
     t[0] * w[0] + t[1] * w[1] + t[2] * w[2]
 }
 
+/// The squared distance from `p` to triangle `t`.
+pub fn distance2(p: DVec3, t: &GridTriangle) -> f64 {
+    point_at(t, closest_point_barycentric(p, t)).distance_squared(p)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

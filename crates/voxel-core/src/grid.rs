@@ -35,6 +35,54 @@ pub struct GridSpec {
     pub scale: f32,
     /// The world-space centre of the model's bounding box.
     pub center: [f32; 3],
+    /// World → grid coordinates, in f64 and snapped (what the voxelizer computes with; the f32 fields above
+    /// describe the same placement for display).
+    map: WorldToGrid,
+}
+
+/// The exact world → grid mapping: grid = snap(`pad` + (world − `lo`) · `per_world`).
+///
+/// A vertex arrives as f32 after its node transform, so the same shape under another node scale or
+/// translation differs by rounding (≈ 2⁻²⁴ of its coordinates). Snapping every grid coordinate to a multiple
+/// of `quantum`, a power of two of a cell well above that noise and well below anything visible, turns a face
+/// that lies on a cell boundary or a cell centre (up to rounding) into one that lies exactly on it, the same
+/// bits for every scaled or moved copy, so the shell, the fill and the hollow pass decide its ties alike.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct WorldToGrid {
+    /// The world-space minimum corner of the model's bounding box.
+    lo: DVec3,
+    /// The grid coordinates of `lo` (0 along the longest axis; half the spare cells along the others).
+    pad: DVec3,
+    /// Grid cells per world unit along x, y, z.
+    per_world: DVec3,
+    /// The snapping step in cells (a power of two).
+    quantum: f64,
+}
+
+impl WorldToGrid {
+    /// World position → snapped grid coordinates. `p − lo` is exact (f32 operands in f64), so the only
+    /// rounding before the snap is the multiplication.
+    #[inline]
+    fn apply(&self, p: [f32; 3]) -> DVec3 {
+        let g = self.pad + (DVec3::from(p.map(f64::from)) - self.lo) * self.per_world;
+        snap(g, self.quantum)
+    }
+}
+
+/// `v` rounded to the nearest multiple of `quantum` (a power of two, so exact).
+fn snap(v: DVec3, quantum: f64) -> DVec3 {
+    (v / quantum).round() * quantum
+}
+
+/// The snapping step for a model whose coordinates reach `reach` cells from the world origin: the f32 noise of
+/// a coordinate is about 2⁻²⁴ of it (f32 node rotations add a few times that) and the step is 48–96 times
+/// that, at most 1/64 cell (beyond that the model sits so far from the origin that f32 cannot place it).
+/// The exponent is taken of 1.5 · `reach` so that a model centred on the origin (reach = half its cell count,
+/// a multiple of ½) never sits on a step of the power of two, where rounding noise could pick either of two
+/// quanta for two copies of one shape.
+fn snap_quantum(reach: f64) -> f64 {
+    let exponent = (1.5 * reach).log2().floor().clamp(-40.0, 12.0) as i32;
+    2f64.powi(exponent - 18)
 }
 
 impl GridSpec {
@@ -47,13 +95,25 @@ impl GridSpec {
         height_ratio: f32,
         max_cells: u64,
     ) -> Result<Self> {
+        let bounds = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
+        Self::fit_bounds(bounds, model_size, size, height_ratio, max_cells)
+    }
+
+    /// Fits a grid around the box `bounds` (min, max) as [`GridSpec::fit`] does around a soup's bounds: for
+    /// a fixed grid over every pose of an animation.
+    pub fn fit_bounds(
+        (lo, hi): ([f32; 3], [f32; 3]),
+        model_size: f32,
+        size: GridSize,
+        height_ratio: f32,
+        max_cells: u64,
+    ) -> Result<Self> {
         if !(model_size.is_finite() && model_size > 0.0) {
             return Err(VoxelError::Parameter(format!("model size must be positive, got {model_size}")));
         }
         if !(height_ratio.is_finite() && (0.1..=10.0).contains(&height_ratio)) {
             return Err(VoxelError::Parameter(format!("cell height ratio must be in 0.1..=10, got {height_ratio}")));
         }
-        let (lo, hi) = soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?;
         let lo = DVec3::from(lo.map(f64::from));
         let hi = DVec3::from(hi.map(f64::from));
         let diag = (hi - lo).length();
@@ -74,8 +134,11 @@ impl GridSpec {
             }
         };
         let cell = DVec3::new(width, width * ratio, width);
-        // A hair of tolerance so that an extent of exactly R cells does not round up to R + 1.
-        let n = (extent / cell - DVec3::splat(1e-6)).ceil().max(DVec3::ONE);
+        let per_world = scale / cell;
+        let span = (hi - lo) * per_world;
+        let quantum = snap_quantum((lo.abs().max(hi.abs()) * per_world).max_element());
+        // Snapped like the coordinates, so that an extent of R cells up to rounding holds exactly R cells.
+        let n = snap(span, quantum).ceil().max(DVec3::ONE);
         let too_big = |nx: f64, ny: f64, nz: f64| VoxelError::GridTooLarge {
             nx: nx as u64,
             ny: ny as u64,
@@ -95,6 +158,7 @@ impl GridSpec {
             origin: origin.as_vec3().to_array(),
             scale: scale as f32,
             center: center.as_vec3().to_array(),
+            map: WorldToGrid { lo, pad: (n - span) / 2.0, per_world, quantum },
         })
     }
 
@@ -142,13 +206,11 @@ impl GridSpec {
         std::array::from_fn(|a| self.origin[a] + (c[a] as f32 + 0.5) * self.cell[a])
     }
 
-    /// World position → grid coordinates (cell (i, j, k) spans [i, i+1] etc.), in f64.
+    /// World position → grid coordinates (cell (i, j, k) spans [i, i+1] etc.), in f64, snapped to a small
+    /// power-of-two fraction of a cell so that scaled or moved copies of a shape map to the same coordinates.
     #[inline]
     pub fn to_grid(&self, p: [f32; 3]) -> DVec3 {
-        DVec3::from_array(std::array::from_fn(|a| {
-            ((f64::from(p[a]) - f64::from(self.center[a])) * f64::from(self.scale) - f64::from(self.origin[a]))
-                / f64::from(self.cell[a])
-        }))
+        self.map.apply(p)
     }
 
     /// Every triangle of `soup` in grid coordinates.

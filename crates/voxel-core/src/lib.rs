@@ -5,8 +5,10 @@
 //! ```
 //! No rendering types here; deterministic whatever the thread count.
 
+pub mod anim;
 pub mod bvh;
 pub mod cli;
+pub mod cli_animation;
 pub mod color;
 pub mod error;
 mod fill;
@@ -20,11 +22,13 @@ pub mod soup;
 pub mod vox;
 pub mod voxelize;
 
+pub use anim::{AnimatedModel, Bounds, ClipInfo};
 pub use error::{Result, VoxelError};
 pub use fill::reference_fill;
 pub use grid::{BitGrid, GridSize, GridSpec};
-pub use import::{load_file, load_slice};
+pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
 pub use voxelize::{
     DEFAULT_MAX_CELLS, FillMode, Method, ShellMode, Voxel, VoxelModel, VoxelStats, VoxelizeOptions, voxelize,
+    voxelize_within,
 };

@@ -7,6 +7,9 @@ use rayon::prelude::*;
 use crate::geom::{BoxTester, GridTriangle};
 use crate::grid::{BitGrid, GridSpec};
 
+mod octree;
+pub(crate) use octree::ShellOctree;
+
 /// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
 #[derive(Debug, Default)]
 pub(crate) struct Shell {
@@ -48,7 +51,10 @@ fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bo
 }
 
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
-/// cell boundary lands in one cell, not two).
+/// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
+/// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
+/// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
+/// them).
 fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Vec<u64>) {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
@@ -62,6 +68,9 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
     // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
     let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
+    // The last cell that the extent [from, to] along axis `a` reaches with positive length.
+    let last_cell_of =
+        |a: usize, from: f64, to: f64| cell_of(a, if to > from && to == to.floor() { to - 1.0 } else { to });
     let tester = BoxTester::new(t);
     let mut emit = |c: [u32; 3], exact: bool| {
         let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
@@ -73,7 +82,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         out.push(pack(index, tri, thin));
     };
     let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
-    if lo_cell == [0, 1, 2].map(|a| cell_of(a, hi[a])) {
+    if lo_cell == [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])) {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         emit(lo_cell, true);
         return;
@@ -87,8 +96,8 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         2
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
-    for iu in cell_of(u, lo[u])..=cell_of(u, hi[u]) {
-        for iv in cell_of(v, lo[v])..=cell_of(v, hi[v]) {
+    for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
+        for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
             // Extent of the plane along the dominant axis over this cell's footprint.
             let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
             let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
@@ -102,7 +111,8 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
                     dhi = dhi.max(pd);
                 }
             }
-            for id in cell_of(d, dlo.max(lo[d]))..=cell_of(d, dhi.min(hi[d])) {
+            let (dlo, dhi) = (dlo.max(lo[d]), dhi.min(hi[d]));
+            for id in cell_of(d, dlo)..=last_cell_of(d, dlo, dhi) {
                 let mut c = [0u32; 3];
                 c[u] = iu;
                 c[v] = iv;

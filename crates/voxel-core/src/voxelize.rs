@@ -2,18 +2,18 @@
 
 use std::collections::HashSet;
 use std::sync::OnceLock;
+use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec3A};
-use obvhs::aabb::Aabb;
+use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::error::{Result, VoxelError};
 use crate::fill::{crossings_by_bvh, crossings_by_rasterizing, fill_columns, reachable_from_outside, reference_fill};
-use crate::geom::{GridTriangle, closest_point_barycentric, point_at};
+use crate::geom::{GridTriangle, closest_point_barycentric, distance2};
 use crate::grid::{BitGrid, GridSize, GridSpec};
-use crate::shell::{Shell, shell};
+use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
 
 /// How the inside of the model is found.
@@ -146,11 +146,49 @@ impl VoxelModel {
 
 /// Voxelizes `soup` with `options`.
 pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
+    voxelize_timed(soup, options).map(|(model, _)| model)
+}
+
+/// Voxelizes `soup` in the grid fitted to `bounds` (min, max) instead of the soup's own bounds, so that
+/// every pose of an animation lands in the same cells ([`crate::AnimatedModel::clip_bounds`]). Parts of
+/// the soup outside `bounds` are clipped at the grid's edge.
+pub fn voxelize_within(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<VoxelModel> {
+    voxelize_within_timed(soup, options, bounds).map(|(model, _)| model)
+}
+
+/// The wall time of the passes of one voxelization (for benchmarks).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassTimes {
+    /// Fitting the grid, the grid triangles and the fill.
+    pub fill: Duration,
+    /// The surface shell.
+    pub shell: Duration,
+    /// The colours of the visible cells.
+    pub color: Duration,
+}
+
+/// [`voxelize`], also reporting how long its passes took.
+pub fn voxelize_timed(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<(VoxelModel, PassTimes)> {
+    voxelize_within_timed(soup, options, soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?)
+}
+
+/// [`voxelize_within`], also reporting how long its passes took.
+fn voxelize_within_timed(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<(VoxelModel, PassTimes)> {
     soup.validate()?;
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
     }
-    let spec = GridSpec::fit(soup, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let started = Instant::now();
+    let spec =
+        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
     let tris = spec.grid_triangles(soup);
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
@@ -164,10 +202,14 @@ pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelM
         (FillMode::Parity, Method::Reference) => reference_fill(&spec, &tris),
         (FillMode::Flood | FillMode::None, _) => BitGrid::new(spec.cell_count()),
     };
+    let filled = Instant::now();
     let shell = shell(&spec, &tris, &fill);
+    let shelled = Instant::now();
     let solid = combine(&spec, options, fill, &shell);
     let visible = visible_cells(&spec, &solid);
+    let coloring = Instant::now();
     let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
+    let times = PassTimes { fill: filled - started, shell: shelled - filled, color: coloring.elapsed() };
     if options.pastel {
         colors.par_iter_mut().for_each(|(c, _)| *c = pastel(*c));
     }
@@ -181,7 +223,7 @@ pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelM
         // Interior voxels copy visible ones, so the visible cells hold every colour.
         colors: colors.iter().map(|c| c.0).collect::<HashSet<_>>().len(),
     };
-    Ok(VoxelModel { spec, voxels, stats, parts: soup.parts.iter().map(|p| p.name.clone()).collect() })
+    Ok((VoxelModel { spec, voxels, stats, parts: soup.parts.iter().map(|p| p.name.clone()).collect() }, times))
 }
 
 /// The solid cells from the fill and the shell, per the modes.
@@ -254,24 +296,19 @@ fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
 /// The steps to the six face neighbours.
 const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]];
 
-/// The steps to the cells at Chebyshev distance exactly `r` (the surface of a (2r+1)³ cube).
-fn cube_ring(r: i32) -> impl Iterator<Item = [i32; 3]> {
-    (-r..=r).flat_map(move |x| {
-        (-r..=r).flat_map(move |y| {
-            (-r..=r).filter(move |&z| x.abs() == r || y.abs() == r || z.abs() == r).map(move |z| [x, y, z])
-        })
-    })
-}
-
-/// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with its distance².
-fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<(usize, f64)> {
-    candidates
-        .map(|t| (t, point_at(&tris[t], closest_point_barycentric(p, &tris[t])).distance_squared(p)))
-        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+/// The nearest triangle to grid point `p` among `candidates` (ties: lower index).
+fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<usize> {
+    candidates.map(|t| (t, distance2(p, &tris[t]))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0))).map(|n| n.0)
 }
 
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
-/// triangle (a shell triangle of the cell or its face neighbours; the BVH beyond that).
+/// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
+/// face lies), else of the whole model. Cells that far from the surface only occur where an open mesh leaves
+/// a column unmatched; for them one index is built, outside the parallel loop, and each lookup walks the
+/// part of it near its cell: a BVH over the triangles when they are fewer than the shell cells (a big
+/// triangle spans many cells, whose boxes bound it loosely), else an octree over the shell cells (built in
+/// time linear in the shell, where a BVH over many small triangles would cost more to build than the shell).
+/// Both give the nearest triangle of nonzero area, ties to the lower index.
 fn surface_colors(
     soup: &TriangleSoup,
     spec: &GridSpec,
@@ -280,50 +317,43 @@ fn surface_colors(
     visible: &[u32],
     bvh: &OnceLock<TriangleBvh>,
 ) -> Vec<([u8; 4], u32)> {
-    visible
+    let centre = |i: u32| {
+        let c = spec.coords(i as usize);
+        DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
+    };
+    let shell_triangles = |cell: usize| shell.triangles_of(cell).iter().map(|&t| t as usize);
+    let mut nearest: Vec<Option<usize>> = visible
         .par_iter()
         .map(|&i| {
-            let i = i as usize;
-            let c = spec.coords(i);
-            let p = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-            let own = shell.triangles_of(i);
-            let tri = nearest_among(tris, p, own.iter().map(|&t| t as usize)).map(|(t, _)| t).or_else(|| {
-                // Shell triangles of the face neighbours (where the surface crossing a face lies), then of
-                // the cells at Chebyshev distance 1, 2, … 8, nearest ring first.
-                (0..=8)
-                    .find_map(|r| {
-                        let steps: Box<dyn Iterator<Item = [i32; 3]>> =
-                            if r == 0 { Box::new(FACE_STEPS.into_iter()) } else { Box::new(cube_ring(r)) };
-                        let ring = steps.filter_map(|step| spec.offset(i, step));
-                        let candidates = ring.flat_map(|j| shell.triangles_of(j).iter().map(|&t| t as usize));
-                        nearest_among(tris, p, candidates).map(|(t, _)| t)
-                    })
-                    .or_else(|| nearest_in_bvh(tris, bvh.get_or_init(|| TriangleBvh::build(tris)), p))
-            });
-            match tri {
-                Some(t) => (sample(soup, t, closest_point_barycentric(p, &tris[t])), soup.triangle_parts[t]),
-                None => ([255; 4], 0),
-            }
+            let p = centre(i);
+            nearest_among(tris, p, shell_triangles(i as usize)).or_else(|| {
+                let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
+                nearest_among(tris, p, faces.flat_map(shell_triangles))
+            })
+        })
+        .collect();
+    if nearest.contains(&None) {
+        let far: Box<dyn Fn(DVec3) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
+            let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
+            let has_area = |t: &GridTriangle| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0;
+            Box::new(move |p| {
+                let d2 = |t: usize| if has_area(&tris[t]) { distance2(p, &tris[t]) } else { f64::INFINITY };
+                bvh.nearest(p, d2).filter(|n| n.1.is_finite()).map(|n| n.0)
+            })
+        } else {
+            let octree = ShellOctree::new(spec, shell);
+            Box::new(move |p| octree.nearest(tris, p))
+        };
+        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| *t = far(centre(i)));
+    }
+    visible
+        .par_iter()
+        .zip(&nearest)
+        .map(|(&i, &t)| match t {
+            Some(t) => (sample(soup, t, closest_point_barycentric(centre(i), &tris[t])), soup.triangle_parts[t]),
+            None => ([255; 4], 0),
         })
         .collect()
-}
-
-/// The nearest triangle to `p` by BVH box queries of growing size.
-fn nearest_in_bvh(tris: &[GridTriangle], bvh: &TriangleBvh, p: DVec3) -> Option<usize> {
-    let mut r = 2.0f32;
-    for _ in 0..24 {
-        let c = Vec3A::from(p.as_vec3());
-        let mut found = Vec::new();
-        bvh.for_each_in_box(Aabb::new(c - r, c + r), |t| found.push(t));
-        if let Some((t, d2)) = nearest_among(tris, p, found.into_iter()) {
-            // Anything outside the box is farther than r; accept once the best lies within it.
-            if d2 <= f64::from(r * r) {
-                return Some(t);
-            }
-        }
-        r *= 2.0;
-    }
-    None
 }
 
 /// Builds the output voxels. An interior cell takes the colour of the nearer end of its solid run

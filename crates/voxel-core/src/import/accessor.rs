@@ -128,6 +128,16 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers, what: &s
     Ok((values, ncomp))
 }
 
+/// Reads an accessor of exactly `N` components per element (as f32).
+pub(crate) fn read_vecs<const N: usize>(
+    accessor: &Accessor<'_>,
+    buffers: &Buffers,
+    what: &str,
+) -> Result<Vec<[f32; N]>> {
+    let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+    to_vecs(&values, ncomp, what)
+}
+
 /// Groups flat values of `ncomp` components per element into `N`-vectors (an error unless `ncomp == N`).
 pub(crate) fn to_vecs<const N: usize>(values: &[f64], ncomp: usize, what: &str) -> Result<Vec<[f32; N]>> {
     if ncomp != N {

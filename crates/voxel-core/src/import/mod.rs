@@ -6,6 +6,7 @@
 //! naming it; malformed files are refused with an error naming what is wrong (see [`validate`]).
 
 mod accessor;
+mod animation;
 mod buffers;
 mod draco;
 mod materials;
@@ -24,6 +25,8 @@ use buffers::Buffers;
 use draco::DracoPrimitive;
 use materials::MaterialCache;
 
+pub use animation::{load_animated_file, load_animated_slice};
+
 /// The most triangles an import may produce (node instancing can multiply a small file).
 pub const MAX_TRIANGLES: usize = 20_000_000;
 
@@ -35,6 +38,24 @@ pub fn load_file(path: &Path) -> Result<TriangleSoup> {
 
 /// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
 pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
+    import_with(bytes, base_dir, |_, builder| Ok(builder.soup))
+}
+
+/// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
+struct PartSource {
+    node: usize,
+    mesh: usize,
+    decoded: usize,
+    first_vertex: usize,
+}
+
+/// Imports the soup, then hands the document and the builder (the soup and what it was decoded from) to
+/// `finish`.
+fn import_with<T>(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
+) -> Result<T> {
     let gltf::Gltf { document, blob } = validate::parse(bytes)?;
     let document = validate::check(document)?;
     let buffers = Buffers::load(&document, base_dir, blob)?;
@@ -44,18 +65,18 @@ pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup>
         document: &document,
         buffers: &buffers,
         parts_of_mesh: HashMap::new(),
+        instances: Vec::new(),
     };
     for (node, transform) in scene_instances(&document)? {
         if let Some(mesh) = node.mesh() {
-            builder.add_mesh(&mesh, &transform)?;
+            builder.add_mesh(node.index(), &mesh, &transform)?;
         }
     }
-    let soup = builder.soup;
-    if soup.triangle_count() == 0 {
+    if builder.soup.triangle_count() == 0 {
         return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
     }
-    soup.validate()?;
-    Ok(soup)
+    builder.soup.validate()?;
+    finish(&document, builder)
 }
 
 /// Every mesh-carrying node instance of the default scene with its composed world transform.
@@ -124,10 +145,14 @@ struct SoupBuilder<'a> {
     buffers: &'a Buffers,
     /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
     parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
+    /// Where each part came from.
+    instances: Vec<PartSource>,
 }
 
 /// One primitive's triangles in mesh space with their attributes.
 struct DecodedPrimitive {
+    /// The glTF primitive index within its mesh.
+    primitive: usize,
     material: usize,
     name: String,
     positions: Vec<[f32; 3]>,
@@ -137,7 +162,7 @@ struct DecodedPrimitive {
 }
 
 impl SoupBuilder<'_> {
-    fn add_mesh(&mut self, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
+    fn add_mesh(&mut self, node: usize, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
         if !self.parts_of_mesh.contains_key(&mesh.index()) {
             let mut decoded = Vec::new();
             for prim in mesh.primitives() {
@@ -152,7 +177,9 @@ impl SoupBuilder<'_> {
         if self.soup.triangle_count() + added > MAX_TRIANGLES {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
-        for prim in prims {
+        for (decoded, prim) in prims.iter().enumerate() {
+            let first_vertex = self.soup.vertices.len();
+            self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world: Vec<[f32; 3]> = prim
                 .positions
@@ -229,6 +256,7 @@ impl SoupBuilder<'_> {
             None => None,
         };
         Ok(Some(DecodedPrimitive {
+            primitive: prim.index(),
             material: soup_material,
             name,
             positions,

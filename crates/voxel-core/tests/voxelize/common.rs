@@ -3,21 +3,11 @@
 use std::collections::HashSet;
 use std::path::PathBuf;
 
-use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
+#[path = "../support/models.rs"]
+mod models;
+pub use models::models_dir;
 
-/// The folder of third-party test models, or `None` (with the reason printed) when absent.
-/// `VOXEL_ART_MODELS` overrides the default `../shared/models` next to the repository.
-pub fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("VOXEL_ART_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/models"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: test models not found at {} (set VOXEL_ART_MODELS)", dir.display());
-        None
-    }
-}
+use voxel_core::{GridSize, VoxelModel, VoxelizeOptions};
 
 /// A model of the corpus by relative path, or `None` when the corpus is absent.
 pub fn model(relative: &str) -> Option<PathBuf> {
@@ -41,7 +31,13 @@ pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
 
 /// A unit cube (8 positions, 36 u16 indices) as little-endian bytes, positions first.
 pub fn cube_buffer() -> (Vec<u8>, usize, usize) {
-    let mesh = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
+    cuboid_buffer([0.0; 3], [1.0; 3])
+}
+
+/// The box from `lo` to `hi` (8 positions, 36 u16 indices) as little-endian bytes, positions first, with the
+/// byte length of the positions and the index count.
+pub fn cuboid_buffer(lo: [f32; 3], hi: [f32; 3]) -> (Vec<u8>, usize, usize) {
+    let mesh = voxel_core::shapes::cuboid(lo, hi);
     let mut bin = Vec::new();
     for p in &mesh.positions {
         for c in p {

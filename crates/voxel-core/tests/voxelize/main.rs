@@ -1,10 +1,13 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod animation;
+mod colors;
 mod common;
 mod compressed;
 mod corpus;
 mod errors;
 mod export;
 mod meshopt;
+mod scale;
 mod shapes;

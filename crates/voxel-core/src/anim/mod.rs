@@ -1,0 +1,401 @@
+//! Animated models: a glTF's node tree, skins, morph targets and clips, posed at any time of a clip into the
+//! world-space [`TriangleSoup`] the voxelizer reads.
+//!
+//! A pose is, in the glTF order: the clip's channels set node translations, rotations, scales and morph
+//! weights; node transforms compose down the tree; each primitive adds its weighted morph-target deltas to
+//! its base positions; a skinned primitive is then moved by linear-blend skinning (joint matrix = the joint's
+//! global transform × its inverse bind matrix; the skinned node's own transform is ignored, as the
+//! specification says), any other one by its node's global transform. Colours, UVs, parts and materials stay
+//! those of the static import, so colours follow the surface.
+//!
+//! Built by [`crate::import::load_animated_file`]; [`AnimatedModel::pose_into`] reuses its buffers, so
+//! posing allocates nothing after the first frame.
+
+mod check;
+mod sampler;
+
+use glam::{Mat4, Quat, Vec3};
+
+pub use sampler::{Interpolation, Sampler};
+
+use crate::error::{Result, VoxelError};
+use crate::soup::TriangleSoup;
+
+/// An axis-aligned box (min, max), as [`TriangleSoup::bounds`] returns it.
+pub type Bounds = ([f32; 3], [f32; 3]);
+
+/// Poses per second sampled (besides every keyframe time) when fitting a grid to a clip.
+pub const BOUNDS_SAMPLES_PER_SECOND: f32 = 30.0;
+
+/// The most evenly spaced poses sampled for a clip's bounds (a very long clip is sampled more sparsely).
+pub const MAX_BOUNDS_SAMPLES: usize = 10_000;
+
+/// What a caller needs to know about a clip.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClipInfo {
+    /// The glTF animation's name (`animation <index>` when it has none).
+    pub name: String,
+    /// The last keyframe time in seconds; the clip loops over `0..duration`.
+    pub duration: f32,
+    /// The number of channels (animated node properties).
+    pub channels: usize,
+}
+
+/// The node property a channel animates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// Translation (3 values).
+    Translation,
+    /// Rotation quaternion x, y, z, w (4 values).
+    Rotation,
+    /// Scale (3 values).
+    Scale,
+    /// Morph-target weights (one per target of the node's mesh).
+    Weights,
+}
+
+impl Target {
+    /// Values per keyframe: 3, 4 for a rotation, or the node's number of morph targets for weights.
+    pub fn width(self, morph_targets: usize) -> usize {
+        match self {
+            Target::Translation | Target::Scale => 3,
+            Target::Rotation => 4,
+            Target::Weights => morph_targets,
+        }
+    }
+}
+
+/// One animated property of one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    /// The node index.
+    pub node: usize,
+    /// The property.
+    pub target: Target,
+    /// Its keyframes.
+    pub sampler: Sampler,
+}
+
+/// A clip: named channels played together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// Name, duration, channel count.
+    pub info: ClipInfo,
+    /// The channels.
+    pub channels: Vec<Channel>,
+}
+
+/// A node's local transform as translation, rotation and scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    /// Translation.
+    pub translation: Vec3,
+    /// Rotation.
+    pub rotation: Quat,
+    /// Scale.
+    pub scale: Vec3,
+}
+
+impl Trs {
+    /// The local matrix T · R · S.
+    fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// A node of the tree, at rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    /// The parent node, `None` for a root.
+    pub parent: Option<usize>,
+    /// The rest transform.
+    pub rest: Trs,
+    /// A rest matrix that replaces `rest` (glTF `matrix` nodes, which channels may not target).
+    pub matrix: Option<Mat4>,
+    /// Default morph weights: the node's `weights`, else its mesh's, else zeros (one per target).
+    pub weights: Vec<f32>,
+    /// The skin (index into the skins) that deforms the node's mesh.
+    pub skin: Option<usize>,
+}
+
+/// A skin: joint nodes and their inverse bind matrices (identity when the file gives none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    /// Joint node indices.
+    pub joints: Vec<usize>,
+    /// One inverse bind matrix per joint.
+    pub inverse_bind: Vec<Mat4>,
+}
+
+/// Per-vertex skin influences: `per_vertex` (joint, weight) pairs per vertex. Weights are normalized when
+/// posing; a vertex whose weights are all zero is not skinned and follows its node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Influences {
+    /// Influences per vertex (4, or 8 with JOINTS_1/WEIGHTS_1).
+    pub per_vertex: usize,
+    /// Indices into the skin's joints.
+    pub joints: Vec<u16>,
+    /// Weights.
+    pub weights: Vec<f32>,
+}
+
+/// A mesh primitive in mesh space with what deforms it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    /// Base positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex index of every triangle corner, in the order the soup holds the corners.
+    pub corners: Vec<u32>,
+    /// POSITION deltas per morph target.
+    pub targets: Vec<Vec<Vec3>>,
+    /// Joints and weights, when the primitive has JOINTS_0/WEIGHTS_0.
+    pub influences: Option<Influences>,
+}
+
+/// One part of the soup: a primitive placed by a node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Instance {
+    /// The node.
+    pub node: usize,
+    /// Index into the primitives.
+    pub primitive: usize,
+    /// The soup vertex of the primitive's first corner.
+    pub first_vertex: usize,
+}
+
+/// Buffers reused from pose to pose.
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    local: Vec<Trs>,
+    weights: Vec<Vec<f32>>,
+    global: Vec<Mat4>,
+    joints: Vec<Mat4>,
+    positions: Vec<Vec3>,
+    value: Vec<f32>,
+}
+
+/// A model with its animation data, posed on demand. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct AnimatedModel {
+    rest: TriangleSoup,
+    nodes: Vec<Node>,
+    /// Nodes ordered parents first.
+    order: Vec<usize>,
+    skins: Vec<Skin>,
+    primitives: Vec<Primitive>,
+    instances: Vec<Instance>,
+    clips: Vec<ClipInfo>,
+    /// The channels of each clip.
+    channels: Vec<Vec<Channel>>,
+    scratch: Scratch,
+}
+
+impl AnimatedModel {
+    /// A model without animation: [`AnimatedModel::clips`] is empty and only the rest soup is kept.
+    pub fn still(rest: TriangleSoup) -> Self {
+        Self {
+            rest,
+            nodes: Vec::new(),
+            order: Vec::new(),
+            skins: Vec::new(),
+            primitives: Vec::new(),
+            instances: Vec::new(),
+            clips: Vec::new(),
+            channels: Vec::new(),
+            scratch: Scratch::default(),
+        }
+    }
+
+    /// Assembles a model, checking every index (parents, skins, joints, primitives, instances, channels) and
+    /// that the instances cover the rest soup's corners. `rest` is the static import (its UVs, colours,
+    /// parts and materials are kept; positions are replaced by each pose).
+    pub fn new(
+        rest: TriangleSoup,
+        nodes: Vec<Node>,
+        skins: Vec<Skin>,
+        primitives: Vec<Primitive>,
+        instances: Vec<Instance>,
+        clips: Vec<Clip>,
+    ) -> Result<Self> {
+        let order = parents_first(&nodes)?;
+        check::skins(&skins, &nodes)?;
+        check::primitives(&primitives)?;
+        check::instances(&instances, &nodes, &skins, &primitives, rest.vertices.len())?;
+        check::clips(&clips, &nodes)?;
+        let scratch = Scratch {
+            local: nodes.iter().map(|n| n.rest).collect(),
+            weights: nodes.iter().map(|n| n.weights.clone()).collect(),
+            global: vec![Mat4::IDENTITY; nodes.len()],
+            joints: Vec::new(),
+            positions: Vec::new(),
+            value: Vec::new(),
+        };
+        let (clips, channels) = clips.into_iter().map(|c| (c.info, c.channels)).unzip();
+        Ok(Self { rest, nodes, order, skins, primitives, instances, clips, channels, scratch })
+    }
+
+    /// The static import (bind pose, node transforms applied), as [`crate::load_file`] returns it.
+    pub fn rest_soup(&self) -> &TriangleSoup {
+        &self.rest
+    }
+
+    /// The clips; empty when the model is not animated.
+    pub fn clips(&self) -> &[ClipInfo] {
+        &self.clips
+    }
+
+    /// The index of the clip named `name`, else of the clip whose index `name` spells.
+    pub fn find_clip(&self, name: &str) -> Option<usize> {
+        self.clips
+            .iter()
+            .position(|c| c.name == name)
+            .or_else(|| name.parse::<usize>().ok().filter(|&i| i < self.clips.len()))
+    }
+
+    /// Poses clip `clip` at `t` seconds (wrapped into the clip: `t = duration + x` poses as `t = x`) into
+    /// `out`. `out` is reset to the rest soup when it does not have its shape; pass the same soup every
+    /// frame and only positions are written.
+    pub fn pose_into(&mut self, clip: usize, t: f32, out: &mut TriangleSoup) -> Result<()> {
+        check_clip(&self.clips, clip)?;
+        if !t.is_finite() {
+            return Err(VoxelError::Parameter(format!("pose time must be finite, got {t}")));
+        }
+        let duration = self.clips[clip].duration;
+        let t = if duration > 0.0 { t.rem_euclid(duration) } else { 0.0 };
+        let s = &mut self.scratch;
+        for (n, node) in self.nodes.iter().enumerate() {
+            s.local[n] = node.rest;
+            s.weights[n].copy_from_slice(&node.weights);
+        }
+        for ch in &self.channels[clip] {
+            s.value.resize(ch.sampler.width(), 0.0);
+            ch.sampler.sample(t, &mut s.value);
+            let v = &s.value;
+            let local = &mut s.local[ch.node];
+            match ch.target {
+                Target::Translation => local.translation = Vec3::from_slice(v),
+                Target::Rotation => local.rotation = Quat::from_slice(v),
+                Target::Scale => local.scale = Vec3::from_slice(v),
+                Target::Weights => s.weights[ch.node].copy_from_slice(v),
+            }
+        }
+        for &n in &self.order {
+            let node = &self.nodes[n];
+            let local = node.matrix.unwrap_or_else(|| s.local[n].matrix());
+            s.global[n] = node.parent.map_or(local, |p| s.global[p] * local);
+        }
+        let same_shape = out.vertices.len() == self.rest.vertices.len()
+            && out.parts.len() == self.rest.parts.len()
+            && out.materials.len() == self.rest.materials.len();
+        if !same_shape {
+            out.clone_from(&self.rest);
+        }
+        for inst in &self.instances {
+            let prim = &self.primitives[inst.primitive];
+            let node = &self.nodes[inst.node];
+            s.positions.clear();
+            s.positions.extend_from_slice(&prim.positions);
+            for (target, &w) in prim.targets.iter().zip(&s.weights[inst.node]) {
+                if w != 0.0 {
+                    s.positions.iter_mut().zip(target).for_each(|(p, d)| *p += w * *d);
+                }
+            }
+            match (node.skin, &prim.influences) {
+                (Some(skin), Some(influences)) => {
+                    let skin = &self.skins[skin];
+                    s.joints.clear();
+                    s.joints.extend(skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ibm)| s.global[j] * *ibm));
+                    skin_positions(&mut s.positions, influences, &s.joints, s.global[inst.node]);
+                }
+                _ => {
+                    let m = s.global[inst.node];
+                    s.positions.iter_mut().for_each(|p| *p = m.transform_point3(*p));
+                }
+            }
+            let corners = &mut out.vertices[inst.first_vertex..inst.first_vertex + prim.corners.len()];
+            for (v, &c) in corners.iter_mut().zip(&prim.corners) {
+                v.position = s.positions[c as usize].to_array();
+            }
+        }
+        Ok(())
+    }
+
+    /// The union of the bounds of clip `clip`'s poses, sampled at [`BOUNDS_SAMPLES_PER_SECOND`] (at most
+    /// [`MAX_BOUNDS_SAMPLES`] poses) and at every keyframe time: the box to voxelize every frame of the clip in
+    /// ([`crate::voxelize::voxelize_within`]), so the grid does not move as the pose changes.
+    pub fn clip_bounds(&mut self, clip: usize) -> Result<Bounds> {
+        check_clip(&self.clips, clip)?;
+        let duration = self.clips[clip].duration;
+        let samples = ((duration * BOUNDS_SAMPLES_PER_SECOND).ceil() as usize).min(MAX_BOUNDS_SAMPLES);
+        let step = (1.0 / BOUNDS_SAMPLES_PER_SECOND).max(duration / MAX_BOUNDS_SAMPLES as f32);
+        let mut times: Vec<f32> = (0..=samples).map(|i| i as f32 * step).collect();
+        times.retain(|&t| t <= duration);
+        times.extend(self.channels[clip].iter().flat_map(|c| c.sampler.times().iter().copied()));
+        times.sort_by(f32::total_cmp);
+        times.dedup();
+        let mut soup = TriangleSoup::default();
+        let mut union: Option<Bounds> = None;
+        for t in times {
+            // The clip's last key time wraps to 0; pose it as the end of the clip instead.
+            let t = if t >= duration { duration.next_down() } else { t };
+            self.pose_into(clip, t.max(0.0), &mut soup)?;
+            let Some((lo, hi)) = soup.bounds() else { continue };
+            union = Some(match union {
+                None => (lo, hi),
+                Some((ulo, uhi)) => {
+                    (std::array::from_fn(|a| ulo[a].min(lo[a])), std::array::from_fn(|a| uhi[a].max(hi[a])))
+                }
+            });
+        }
+        union.ok_or_else(|| VoxelError::Empty(String::new()))
+    }
+}
+
+/// An error naming `clip` when it is not one of `clips`.
+fn check_clip(clips: &[ClipInfo], clip: usize) -> Result<()> {
+    if clip < clips.len() {
+        Ok(())
+    } else {
+        Err(VoxelError::Parameter(format!("clip {clip} does not exist (the model has {})", clips.len())))
+    }
+}
+
+/// Linear-blend skinning in place: each position becomes Σ wᵢ · joint[jᵢ] · p / Σ wᵢ (weights that do not
+/// sum to 1 are normalized); vertices without weight follow `node` (their node's global transform).
+fn skin_positions(positions: &mut [Vec3], influences: &Influences, joints: &[Mat4], node: Mat4) {
+    let k = influences.per_vertex;
+    for (v, p) in positions.iter_mut().enumerate() {
+        let range = v * k..(v + 1) * k;
+        let mut blended = Mat4::ZERO;
+        let mut total = 0.0;
+        for (&j, &w) in influences.joints[range.clone()].iter().zip(&influences.weights[range]) {
+            if w != 0.0 {
+                blended += joints[usize::from(j)] * w;
+                total += w;
+            }
+        }
+        *p = if total > 0.0 { blended.transform_point3(*p) / total } else { node.transform_point3(*p) };
+    }
+}
+
+/// The nodes ordered so that every parent comes before its children; a cycle is an error.
+fn parents_first(nodes: &[Node]) -> Result<Vec<usize>> {
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+    let mut order = Vec::with_capacity(nodes.len());
+    for (n, node) in nodes.iter().enumerate() {
+        match node.parent {
+            Some(p) if p < nodes.len() => children[p].push(n),
+            Some(p) => return Err(VoxelError::Invalid(format!("node {n} has a missing parent {p}"))),
+            None => order.push(n),
+        }
+    }
+    let mut next = 0;
+    while next < order.len() {
+        order.extend_from_slice(&children[order[next]]);
+        next += 1;
+    }
+    if order.len() != nodes.len() {
+        return Err(VoxelError::Invalid("the node graph has a cycle".into()));
+    }
+    Ok(order)
+}
