@@ -8,6 +8,7 @@ use std::time::Instant;
 use clap::{Parser, ValueEnum};
 
 use crate::error::{Result, VoxelError};
+use crate::export::{self, ExportOptions, Format, MeshStats, Written};
 use crate::grid::GridSize;
 use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
 
@@ -25,6 +26,14 @@ enum ShellArg {
     Auto,
     All,
     None,
+}
+
+/// Export format on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum FormatArg {
+    Vox,
+    Glb,
+    Gltf,
 }
 
 /// Parity implementation on the command line.
@@ -69,9 +78,14 @@ struct Args {
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
     method: MethodArg,
-    /// Write MagicaVoxel .vox: a file for one input, a folder (one <name>.vox each) for several.
+    /// Export: a file for one input (.glb, .gltf + .bin, else MagicaVoxel .vox, by extension), a folder
+    /// (one <name>.<format> each) for several.
     #[arg(long, short = 'o')]
     out: Option<PathBuf>,
+    /// Export format, overriding the --out extension (the format of a folder's files; default vox). Not
+    /// with --animation, whose frames are .vox.
+    #[arg(long, value_enum, conflicts_with = "animation")]
+    format: Option<FormatArg>,
     /// Print one JSON object per line per file instead of a readable summary.
     #[arg(long)]
     json: bool,
@@ -120,6 +134,17 @@ impl Args {
             max_cells: self.max_cells,
         }
     }
+
+    /// The export format: --format, else the extension of a single output file, else .vox.
+    fn format(&self, several: bool) -> Format {
+        match (self.format, &self.out) {
+            (Some(FormatArg::Vox), _) => Format::Vox,
+            (Some(FormatArg::Glb), _) => Format::Glb,
+            (Some(FormatArg::Gltf), _) => Format::Gltf,
+            (None, Some(out)) if !several => Format::of_path(out),
+            (None, _) => Format::Vox,
+        }
+    }
 }
 
 /// The JSON line printed per file.
@@ -137,6 +162,12 @@ struct Report<'a> {
     voxelize_ms: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     vox: Option<String>,
+    /// The .glb or .gltf written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gltf: Option<String>,
+    /// What the glTF holds (faces before merging, rectangles after, bytes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mesh: Option<MeshStats>,
 }
 
 /// Whether a path names a glTF model.
@@ -165,13 +196,13 @@ pub fn expand_inputs(inputs: &[PathBuf]) -> Vec<PathBuf> {
     out
 }
 
-fn vox_path(out: &Path, input: &Path, several: bool) -> PathBuf {
-    if several {
-        let stem = input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
-        out.join(format!("{stem}.vox"))
-    } else {
-        out.to_owned()
-    }
+/// The name of an input model: its file stem.
+fn stem(input: &Path) -> String {
+    input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
+}
+
+fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathBuf {
+    if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
 fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -> Result<String> {
@@ -191,17 +222,23 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
     let t1 = Instant::now();
     let model = voxelize(&soup, options)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
-    let vox = match &args.out {
+    let written = match &args.out {
         Some(out) => {
             if several {
                 std::fs::create_dir_all(out)
                     .map_err(|e| VoxelError::Export { path: out.clone(), reason: e.to_string() })?;
             }
-            let path = vox_path(out, file, several);
-            crate::vox::write_vox(&model, &path)?;
-            Some(path.display().to_string())
+            let format = args.format(several);
+            let path = export_path(out, file, several, format);
+            let written = export::write(&model, &path, format, &ExportOptions { name: stem(file) })?;
+            Some((path.display().to_string(), written))
         }
         None => None,
+    };
+    let (vox, gltf, mesh) = match written {
+        Some((path, Written::Vox(_))) => (Some(path), None, None),
+        Some((path, Written::Mesh(stats))) => (None, Some(path), Some(stats)),
+        None => (None, None, None),
     };
     let s = model.stats;
     let name = file.display().to_string();
@@ -218,11 +255,19 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
             load_ms,
             voxelize_ms,
             vox,
+            gltf,
+            mesh,
         };
         serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
     } else {
         let [nx, ny, nz] = s.grid;
-        let written = vox.map(|p| format!(", wrote {p}")).unwrap_or_default();
+        let written = match (vox.or(gltf), mesh) {
+            (Some(p), Some(m)) => {
+                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
+            }
+            (Some(p), None) => format!(", wrote {p}"),
+            (None, _) => String::new(),
+        };
         Ok(format!(
             "{name}: {} triangles -> {nx}x{ny}x{nz} grid, {} voxels ({} surface, {} visible, {} output), {} colours; load {load_ms:.1} ms, voxelize {voxelize_ms:.1} ms{written}",
             s.triangles,

@@ -11,6 +11,7 @@ pub mod cli;
 pub mod cli_animation;
 pub mod color;
 pub mod error;
+pub mod export;
 mod fill;
 pub mod geom;
 pub mod glb;

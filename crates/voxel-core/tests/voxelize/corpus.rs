@@ -8,7 +8,7 @@ use voxel_core::{Method, ShellMode, VoxelizeOptions, load_file, voxelize};
 use crate::common::{at_resolution, cells, model, models_dir};
 
 /// Models closed as a whole (see SOURCES.md), loadable without Draco/meshopt.
-const CLOSED: &[&str] = &[
+pub(crate) const CLOSED: &[&str] = &[
     "polypizza-cherry.glb",
     "polypizza-chili-pepper.glb",
     "polypizza-bonsai.glb",

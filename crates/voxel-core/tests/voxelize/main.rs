@@ -8,6 +8,7 @@ mod compressed;
 mod corpus;
 mod errors;
 mod export;
+mod gltf_export;
 mod meshopt;
 mod scale;
 mod shapes;
