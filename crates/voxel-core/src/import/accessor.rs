@@ -2,12 +2,16 @@
 //! integer encodings of KHR_mesh_quantization and sparse accessors.
 
 use gltf::accessor::{Accessor, DataType, Dimensions};
-use gltf::buffer::{Data, View};
+use gltf::buffer::View;
 
+use super::buffers::Buffers;
 use crate::error::{Result, VoxelError};
 
+/// The most values an accessor without a buffer view (all zeros, or a sparse base) may have.
+const MAX_ZEROS: usize = 1 << 26;
+
 /// Number of components of an accessor element.
-fn component_count(dims: Dimensions) -> usize {
+pub(crate) fn component_count(dims: Dimensions) -> usize {
     match dims {
         Dimensions::Scalar => 1,
         Dimensions::Vec2 => 2,
@@ -28,9 +32,11 @@ fn read_component(bytes: &[u8], ty: DataType, normalized: bool) -> f64 {
         DataType::U32 => f64::from(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
         DataType::F32 => return f64::from(f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
     };
-    if !normalized {
-        return raw;
-    }
+    if normalized { normalize(raw, ty) } else { raw }
+}
+
+/// Maps an integer component of type `ty` to [0, 1] (unsigned) or [-1, 1] (signed), as glTF's `normalized`.
+pub(crate) fn normalize(raw: f64, ty: DataType) -> f64 {
     match ty {
         DataType::I8 => (raw / 127.0).max(-1.0),
         DataType::U8 => raw / 255.0,
@@ -41,28 +47,11 @@ fn read_component(bytes: &[u8], ty: DataType, normalized: bool) -> f64 {
     }
 }
 
-/// The bytes of `view` within its buffer, checked against the buffer's length.
-fn view_bytes<'a>(view: &View<'_>, buffers: &'a [Data], what: &str) -> Result<&'a [u8]> {
-    let buffer = buffers
-        .get(view.buffer().index())
-        .ok_or_else(|| VoxelError::MissingData(format!("{what}: buffer {} is missing", view.buffer().index())))?;
-    let start = view.offset();
-    let end = start.checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or_else(|| {
-        VoxelError::Invalid(format!(
-            "{what}: buffer view {} ({} bytes at {start}) runs past its buffer of {} bytes",
-            view.index(),
-            view.length(),
-            buffer.len()
-        ))
-    })?;
-    Ok(&buffer[start..end])
-}
-
 /// Reads `count` elements of `ncomp` components of type `ty` from `view` starting at `offset`.
 #[allow(clippy::too_many_arguments)]
 fn read_strided(
     view: &View<'_>,
-    buffers: &[Data],
+    buffers: &Buffers,
     offset: usize,
     count: usize,
     ncomp: usize,
@@ -70,7 +59,7 @@ fn read_strided(
     normalized: bool,
     what: &str,
 ) -> Result<Vec<f64>> {
-    let bytes = view_bytes(view, buffers, what)?;
+    let bytes = buffers.view_bytes(view, what)?;
     let elem = ncomp * ty.size();
     let stride = view.stride().unwrap_or(elem);
     if stride < elem {
@@ -99,7 +88,7 @@ fn read_strided(
 
 /// Reads an accessor as a flat list of f64 components (`count * components` values), applying sparse
 /// substitutions. Returns the values and the number of components per element.
-pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<(Vec<f64>, usize)> {
+pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers, what: &str) -> Result<(Vec<f64>, usize)> {
     let ncomp = component_count(accessor.dimensions());
     let ty = accessor.data_type();
     let count = accessor.count();
@@ -109,6 +98,12 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &st
     }
     let mut values = match accessor.view() {
         Some(view) => read_strided(&view, buffers, accessor.offset(), count, ncomp, ty, normalized, what)?,
+        // No data backs these zeros, so their number is bounded here rather than by the file's size.
+        None if count * ncomp > MAX_ZEROS => {
+            return Err(VoxelError::Invalid(format!(
+                "{what}: accessor of {count} elements without a buffer view is too large"
+            )));
+        }
         None => vec![0.0; count * ncomp],
     };
     if let Some(sparse) = accessor.sparse() {
@@ -136,10 +131,15 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &[Data], what: &st
 /// Reads an accessor of exactly `N` components per element (as f32).
 pub(crate) fn read_vecs<const N: usize>(
     accessor: &Accessor<'_>,
-    buffers: &[Data],
+    buffers: &Buffers,
     what: &str,
 ) -> Result<Vec<[f32; N]>> {
     let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+    to_vecs(&values, ncomp, what)
+}
+
+/// Groups flat values of `ncomp` components per element into `N`-vectors (an error unless `ncomp == N`).
+pub(crate) fn to_vecs<const N: usize>(values: &[f64], ncomp: usize, what: &str) -> Result<Vec<[f32; N]>> {
     if ncomp != N {
         return Err(VoxelError::Invalid(format!("{what}: expected {N} components per element, found {ncomp}")));
     }
@@ -147,7 +147,7 @@ pub(crate) fn read_vecs<const N: usize>(
 }
 
 /// Reads an index accessor (unsigned integers, one component).
-pub(crate) fn read_indices(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<u32>> {
+pub(crate) fn read_indices(accessor: &Accessor<'_>, buffers: &Buffers, what: &str) -> Result<Vec<u32>> {
     if !matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32) || accessor.normalized() {
         return Err(VoxelError::Invalid(format!("{what}: indices must be unsigned integers")));
     }
@@ -158,9 +158,8 @@ pub(crate) fn read_indices(accessor: &Accessor<'_>, buffers: &[Data], what: &str
     Ok(values.into_iter().map(|v| v as u32).collect())
 }
 
-/// Reads a colour accessor (VEC3 or VEC4, float or normalized integers) as linear RGBA.
-pub(crate) fn read_colors(accessor: &Accessor<'_>, buffers: &[Data], what: &str) -> Result<Vec<[f32; 4]>> {
-    let (values, ncomp) = read_accessor(accessor, buffers, what)?;
+/// Groups flat RGB or RGBA values into linear RGBA (alpha 1 for RGB).
+pub(crate) fn to_colors(values: &[f64], ncomp: usize, what: &str) -> Result<Vec<[f32; 4]>> {
     match ncomp {
         3 => Ok(values.chunks_exact(3).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]).collect()),
         4 => Ok(values.chunks_exact(4).map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32]).collect()),

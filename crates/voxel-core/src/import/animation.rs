@@ -14,6 +14,7 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::accessor::DataType;
 use gltf::animation::Property;
 
+use super::buffers::Buffers;
 use super::{PartSource, SoupBuilder, accessor, import_with};
 use crate::anim::{
     AnimatedModel, Channel, Clip, ClipInfo, Influences, Instance, Interpolation, Node, Primitive, Sampler, Skin,
@@ -117,7 +118,7 @@ fn identity_trs() -> Trs {
 }
 
 /// A skin's joints and inverse bind matrices (identity when absent).
-fn read_skin(skin: &gltf::Skin<'_>, buffers: &[gltf::buffer::Data]) -> Result<Skin> {
+fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
     let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
     let what = format!("skin {}", skin.index());
     let inverse_bind = match skin.inverse_bind_matrices() {
@@ -144,7 +145,7 @@ fn read_skin(skin: &gltf::Skin<'_>, buffers: &[gltf::buffer::Data]) -> Result<Sk
 fn read_primitive(
     decoded: &super::DecodedPrimitive,
     prim: &gltf::Primitive<'_>,
-    buffers: &[gltf::buffer::Data],
+    buffers: &Buffers,
 ) -> Result<Primitive> {
     let name = &decoded.name;
     let count = decoded.positions.len();
@@ -206,7 +207,7 @@ fn read_primitive(
 }
 
 /// One animation: its channels' samplers, checked against their nodes.
-fn read_clip(animation: &gltf::Animation<'_>, nodes: &[Node], buffers: &[gltf::buffer::Data]) -> Result<Clip> {
+fn read_clip(animation: &gltf::Animation<'_>, nodes: &[Node], buffers: &Buffers) -> Result<Clip> {
     let name = animation.name().map_or_else(|| format!("animation {}", animation.index()), str::to_owned);
     let mut channels = Vec::new();
     for (k, channel) in animation.channels().enumerate() {

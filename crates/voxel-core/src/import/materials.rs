@@ -7,6 +7,7 @@ use std::sync::Arc;
 use gltf::image::Format;
 use gltf::texture::WrappingMode;
 
+use super::buffers::Buffers;
 use crate::error::{Result, VoxelError};
 use crate::soup::{Material, Texture, TextureBinding, TriangleSoup, Wrap};
 
@@ -96,7 +97,7 @@ impl MaterialCache {
         &mut self,
         soup: &mut TriangleSoup,
         material: &gltf::Material<'_>,
-        buffers: &[gltf::buffer::Data],
+        buffers: &Buffers,
     ) -> Result<(usize, Option<TexCoordSet>)> {
         if let Some(&hit) = self.by_gltf_index.get(&material.index()) {
             return Ok(hit);
@@ -125,11 +126,17 @@ impl MaterialCache {
         Ok(resolved)
     }
 
-    fn image(&mut self, image: &gltf::Image<'_>, buffers: &[gltf::buffer::Data]) -> Result<Arc<Texture>> {
+    fn image(&mut self, image: &gltf::Image<'_>, buffers: &Buffers) -> Result<Arc<Texture>> {
         if let Some(t) = self.images.get(&image.index()) {
             return Ok(t.clone());
         }
-        let data = gltf::image::Data::from_source(image.source(), self.base_dir.as_deref(), buffers)
+        let source = image.source();
+        if let gltf::image::Source::View { view, .. } = &source {
+            // The gltf crate slices the buffer unchecked (and never sees decoded meshopt views).
+            let what = format!("image {} in buffer view {}", image.index(), view.index());
+            buffers.buffer_range(view.buffer().index(), view.offset(), view.length(), &what)?;
+        }
+        let data = gltf::image::Data::from_source(source, self.base_dir.as_deref(), &buffers.data)
             .map_err(|e| VoxelError::MissingData(format!("image {}: {e}", image.index())))?;
         let texture = Arc::new(Texture::new(data.width, data.height, to_rgba8(&data)?)?);
         self.images.insert(image.index(), texture.clone());

@@ -1,12 +1,16 @@
 //! glTF 2.0 import (through the `gltf` crate) into a world-space [`TriangleSoup`].
 //!
 //! Handles .glb, .gltf with external buffers and images, data URIs, the default scene's node hierarchy
-//! (matrix or TRS, shared meshes), triangle lists/strips/fans and KHR_mesh_quantization. Files that
-//! require an extension we cannot decode (Draco, meshopt) are refused with an error naming it.
+//! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression
+//! and EXT_meshopt_compression. Files that require an extension we cannot decode are refused with an error
+//! naming it; malformed files are refused with an error naming what is wrong (see [`validate`]).
 
 mod accessor;
 mod animation;
+mod buffers;
+mod draco;
 mod materials;
+mod validate;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -17,27 +21,11 @@ use gltf::mesh::Mode;
 use crate::error::{Result, VoxelError};
 use crate::soup::{TriangleSoup, Vertex};
 
+use buffers::Buffers;
+use draco::DracoPrimitive;
 use materials::MaterialCache;
 
 pub use animation::{load_animated_file, load_animated_slice};
-
-/// Required extensions we understand (or that do not change geometry or base colour).
-const TOLERATED_REQUIRED: &[&str] = &[
-    "KHR_mesh_quantization",
-    "KHR_texture_transform",
-    "KHR_materials_unlit",
-    "KHR_materials_emissive_strength",
-    "KHR_materials_ior",
-    "KHR_materials_specular",
-    "KHR_materials_transmission",
-    "KHR_materials_volume",
-    "KHR_materials_clearcoat",
-    "KHR_materials_sheen",
-    "KHR_materials_iridescence",
-    "KHR_materials_anisotropy",
-    "KHR_materials_dispersion",
-    "KHR_lights_punctual",
-];
 
 /// The most triangles an import may produce (node instancing can multiply a small file).
 pub const MAX_TRIANGLES: usize = 20_000_000;
@@ -68,14 +56,13 @@ fn import_with<T>(
     base_dir: Option<&Path>,
     finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
 ) -> Result<T> {
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice_without_validation(bytes).map_err(describe_parse_error)?;
-    let document = validate(document)?;
-    let buffers =
-        gltf::import_buffers(&document, base_dir, blob).map_err(|e| VoxelError::MissingData(format!("buffer: {e}")))?;
+    let gltf::Gltf { document, blob } = validate::parse(bytes)?;
+    let document = validate::check(document)?;
+    let buffers = Buffers::load(&document, base_dir, blob)?;
     let mut builder = SoupBuilder {
         soup: TriangleSoup::default(),
         materials: MaterialCache::new(base_dir),
+        document: &document,
         buffers: &buffers,
         parts_of_mesh: HashMap::new(),
         instances: Vec::new(),
@@ -90,33 +77,6 @@ fn import_with<T>(
     }
     builder.soup.validate()?;
     finish(&document, builder)
-}
-
-fn describe_parse_error(e: gltf::Error) -> VoxelError {
-    match e {
-        gltf::Error::Binary(b) => VoxelError::Parse(format!("corrupt or truncated GLB ({b:?})")),
-        gltf::Error::Deserialize(d) => VoxelError::Parse(format!("JSON: {d}")),
-        other => VoxelError::Parse(other.to_string()),
-    }
-}
-
-/// Refuses undecodable required extensions, then runs the `gltf` crate's validation.
-fn validate(document: gltf::Document) -> Result<gltf::Document> {
-    let mut root = document.into_json();
-    if let Some(ext) = root.extensions_required.iter().find(|e| !TOLERATED_REQUIRED.contains(&e.as_str())) {
-        return Err(VoxelError::UnsupportedExtension(ext.clone()));
-    }
-    // The gltf crate does not list these as supported; we handle them ourselves, so validate without.
-    root.extensions_required.clear();
-    gltf::Document::from_json(root).map_err(|e| match e {
-        gltf::Error::Validation(errors) => {
-            let list: Vec<String> = errors.iter().take(3).map(|(path, err)| format!("{path}: {err}")).collect();
-            let more = errors.len().saturating_sub(3);
-            let tail = if more > 0 { format!(" (and {more} more)") } else { String::new() };
-            VoxelError::Invalid(format!("{}{tail}", list.join("; ")))
-        }
-        other => VoxelError::Parse(other.to_string()),
-    })
 }
 
 /// Every mesh-carrying node instance of the default scene with its composed world transform.
@@ -181,7 +141,8 @@ fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
 struct SoupBuilder<'a> {
     soup: TriangleSoup,
     materials: MaterialCache,
-    buffers: &'a [gltf::buffer::Data],
+    document: &'a gltf::Document,
+    buffers: &'a Buffers,
     /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
     parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
     /// Where each part came from.
@@ -255,16 +216,18 @@ impl SoupBuilder<'_> {
         if matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
             return Ok(None);
         }
-        let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+        let draco = DracoPrimitive::decode(prim, self.document, self.buffers, &name)?;
+        let Some((values, ncomp)) = self.attribute(prim, draco.as_ref(), gltf::Semantic::Positions, &name)? else {
             return Err(VoxelError::Invalid(format!("{name} has no POSITION attribute")));
         };
-        let positions = accessor::read_vecs::<3>(&pos_acc, self.buffers, &format!("{name} POSITION"))?;
+        let positions = accessor::to_vecs::<3>(&values, ncomp, &format!("{name} POSITION"))?;
         if positions.iter().flatten().any(|c| !c.is_finite()) {
             return Err(VoxelError::NonFinite(name));
         }
-        let indices = match prim.indices() {
-            Some(acc) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
-            None => (0..positions.len() as u32).collect(),
+        let indices = match (&draco, prim.indices()) {
+            (Some(draco), _) => draco.indices(),
+            (None, Some(acc)) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
+            (None, None) => (0..positions.len() as u32).collect(),
         };
         if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
             return Err(VoxelError::Invalid(format!(
@@ -274,9 +237,9 @@ impl SoupBuilder<'_> {
         }
         let (soup_material, tex_coord) = self.materials.resolve(&mut self.soup, &prim.material(), self.buffers)?;
         let uvs = match tex_coord {
-            Some(set) => match prim.get(&gltf::Semantic::TexCoords(set.index)) {
-                Some(acc) => {
-                    let raw = accessor::read_vecs::<2>(&acc, self.buffers, &format!("{name} TEXCOORD_{}", set.index))?;
+            Some(set) => match self.attribute(prim, draco.as_ref(), gltf::Semantic::TexCoords(set.index), &name)? {
+                Some((values, ncomp)) => {
+                    let raw = accessor::to_vecs::<2>(&values, ncomp, &format!("{name} TEXCOORD_{}", set.index))?;
                     check_len(&name, "TEXCOORD", raw.len(), positions.len())?;
                     Some(raw.into_iter().map(|uv| set.transform(uv)).collect())
                 }
@@ -284,9 +247,9 @@ impl SoupBuilder<'_> {
             },
             None => None,
         };
-        let colors = match prim.get(&gltf::Semantic::Colors(0)) {
-            Some(acc) => {
-                let c = accessor::read_colors(&acc, self.buffers, &format!("{name} COLOR_0"))?;
+        let colors = match self.attribute(prim, draco.as_ref(), gltf::Semantic::Colors(0), &name)? {
+            Some((values, ncomp)) => {
+                let c = accessor::to_colors(&values, ncomp, &format!("{name} COLOR_0"))?;
                 check_len(&name, "COLOR_0", c.len(), positions.len())?;
                 Some(c)
             }
@@ -301,6 +264,23 @@ impl SoupBuilder<'_> {
             colors,
             triangles: triangles_of(prim.mode(), &indices),
         }))
+    }
+
+    /// The values of attribute `semantic` of `prim` (flat, with their component count): from its Draco stream
+    /// when that carries it, else from its accessor; `None` when the primitive has no such attribute.
+    fn attribute(
+        &self,
+        prim: &gltf::Primitive<'_>,
+        draco: Option<&DracoPrimitive>,
+        semantic: gltf::Semantic,
+        name: &str,
+    ) -> Result<Option<(Vec<f64>, usize)>> {
+        let Some(acc) = prim.get(&semantic) else { return Ok(None) };
+        let what = format!("{name} {}", semantic.to_string());
+        if let Some(decoded) = draco.map(|d| d.attribute(&semantic.to_string(), &acc, &what)).transpose()?.flatten() {
+            return Ok(Some(decoded));
+        }
+        accessor::read_accessor(&acc, self.buffers, &what).map(Some)
     }
 }
 

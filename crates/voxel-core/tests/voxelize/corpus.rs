@@ -5,7 +5,7 @@ use std::collections::HashSet;
 use voxel_core::color::rgb_to_hsl;
 use voxel_core::{FillMode, Method, ShellMode, VoxelizeOptions, load_file, voxelize};
 
-use crate::common::{at_resolution, cells, model};
+use crate::common::{at_resolution, cells, model, models_dir};
 
 /// Models closed as a whole (see SOURCES.md), loadable without Draco/meshopt.
 pub(crate) const CLOSED: &[&str] = &[
@@ -183,4 +183,19 @@ fn node_hierarchies_place_every_part() {
     let m = voxelize(&soup, &at_resolution(64)).unwrap();
     let used: HashSet<_> = m.voxels.iter().map(|v| soup.parts[v.part as usize].material).collect();
     assert_eq!(used.len(), 5);
+}
+
+#[test]
+fn every_file_of_the_corpus_voxelizes() {
+    let Some(dir) = models_dir() else { return };
+    let mut folders = vec![dir.clone()];
+    folders.extend(std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()));
+    let files = voxel_core::cli::expand_inputs(&folders);
+    // The 18 models of SOURCES.md, the three compressed ones among them.
+    assert!(files.len() >= 18, "only {} model files in {}", files.len(), dir.display());
+    for file in &files {
+        let soup = load_file(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let m = voxelize(&soup, &VoxelizeOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(m.stats.voxels > 0 && m.stats.visible > 0, "{}: {:?}", file.display(), m.stats);
+    }
 }

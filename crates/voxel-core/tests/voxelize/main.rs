@@ -4,10 +4,12 @@
 mod animation;
 mod colors;
 mod common;
+mod compressed;
 mod corpus;
 mod errors;
 mod export;
 mod gltf_export;
+mod meshopt;
 mod scale;
 mod shapes;
 mod winding;
