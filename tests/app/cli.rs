@@ -66,22 +66,27 @@ fn vox_export_reads_back() {
 }
 
 #[test]
-fn folders_expand_to_their_models_and_the_draco_truck_is_refused() {
+fn folders_expand_to_their_models_compressed_ones_voxelize_and_a_bad_file_is_named() {
     let Some(models) = models_dir() else { return };
+    let junk = scratch_dir("cli-junk").join("junk.glb");
+    std::fs::write(&junk, b"glTF but not really").unwrap();
     let out = voxelize(&[
         models.to_str().unwrap(),
         models.join("khronos-cesiummilktruck-draco").to_str().unwrap(),
+        junk.to_str().unwrap(),
         "--json",
         "-r",
         "24",
     ]);
-    assert_eq!(out.status.code(), Some(1), "the Draco and meshopt files fail");
+    assert_eq!(out.status.code(), Some(1), "the junk file fails");
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert!(stdout.lines().count() >= 8, "{stdout}");
+    assert!(stdout.lines().count() >= 12, "{stdout}");
+    for compressed in ["khronos-box-draco.glb", "CesiumMilkTruck.gltf", "khronos-duck-meshopt-quantized.glb"] {
+        assert!(stdout.lines().any(|l| l.contains(compressed)), "{compressed} missing from:\n{stdout}");
+    }
     let stderr = String::from_utf8(out.stderr).unwrap();
-    assert!(stderr.contains("KHR_draco_mesh_compression"), "{stderr}");
-    assert!(stderr.contains("EXT_meshopt_compression"), "{stderr}");
-    assert!(!stderr.contains("panic"));
+    assert!(stderr.contains(&format!("error: {}: ", junk.display())), "{stderr}");
+    assert!(!stderr.contains("panic"), "{stderr}");
 }
 
 #[test]
