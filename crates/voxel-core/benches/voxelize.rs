@@ -5,13 +5,16 @@
 //! `cargo bench -p voxel-core --bench voxelize -- passes` instead prints the time of the fill, shell and
 //! colour passes per model at R = 64 and 128 (medians of 7 runs), plus a cube under a node scale of 0.1 and
 //! an open cube.
+//!
+//! `cargo bench -p voxel-core --bench voxelize -- fill-cost` prints, per model and R = 32, 64, 128, the
+//! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use voxel_core::shapes::cuboid;
 use voxel_core::voxelize::{PassTimes, voxelize_timed};
-use voxel_core::{GridSize, Method, TriangleSoup, VoxelizeOptions, load_file, voxelize};
+use voxel_core::{FillMode, GridSize, Method, TriangleSoup, VoxelizeOptions, load_file, voxelize};
 
 #[path = "../tests/support/models.rs"]
 mod models;
@@ -53,6 +56,27 @@ fn print_passes(name: &str, soup: &TriangleSoup, runs: usize) {
     }
 }
 
+/// Prints one row per resolution: the median voxelize time with the parity and with the winding fill,
+/// from `runs` interleaved pairs of runs (so that load on a shared machine hits both alike).
+fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
+    for r in [32, 64, 128] {
+        let options = |fill| VoxelizeOptions { grid: GridSize::Resolution(r), fill, ..Default::default() };
+        let (parity, winding) = (options(FillMode::Parity), options(FillMode::Winding));
+        let run = |options: &VoxelizeOptions| {
+            let t = Instant::now();
+            voxelize(soup, options).expect("voxelize");
+            t.elapsed()
+        };
+        let (parity_ms, winding_ms): (Vec<_>, Vec<_>) = (0..runs).map(|_| (run(&parity), run(&winding))).unzip();
+        let (parity_ms, winding_ms) = (median_ms(parity_ms), median_ms(winding_ms));
+        println!(
+            "| {name} | {} | {r} | {parity_ms:.1} | {winding_ms:.1} | {:.2} |",
+            soup.triangle_count(),
+            winding_ms / parity_ms
+        );
+    }
+}
+
 /// The models of the corpus folder and its subfolders, sorted.
 fn corpus(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(&[dir.to_path_buf()]);
@@ -88,6 +112,16 @@ fn main() {
         let positions = open.positions.clone();
         open.triangles.retain(|t| !t.iter().all(|&i| positions[i as usize][0] == 1.0));
         print_passes("cube without its +x face, built", &TriangleSoup::from_mesh(&open, [1.0; 4]), 7);
+        return;
+    }
+    if std::env::args().skip(1).any(|a| a == "fill-cost") {
+        println!("| model | triangles | R | parity ms | winding ms | winding / parity |");
+        println!("|---|---:|---:|---:|---:|---:|");
+        for file in &files {
+            if let Ok(soup) = load_file(file) {
+                print_fill_cost(&file.strip_prefix(&dir).unwrap_or(file).display().to_string(), &soup, 9);
+            }
+        }
         return;
     }
     println!(

@@ -139,22 +139,22 @@ impl OrientingUnionFind {
         }
     }
 
-    /// The root of `t` and whether `t` is reversed relative to it (compressing the path).
+    /// The root of `t` and whether `t` is reversed relative to it (halving the path: each node on it is
+    /// pointed to its grandparent, in one pass).
     fn find(&mut self, t: u32) -> (u32, bool) {
-        let (mut root, mut reversed) = (t, false);
-        while self.parent[root as usize] != root {
-            reversed ^= self.reversed[root as usize];
-            root = self.parent[root as usize];
+        let (mut node, mut reversed) = (t, false);
+        loop {
+            let parent = self.parent[node as usize];
+            if parent == node {
+                return (node, reversed);
+            }
+            // A root is never reversed, so pointing a root's child at the root changes nothing.
+            let grandparent = self.parent[parent as usize];
+            self.reversed[node as usize] ^= self.reversed[parent as usize];
+            self.parent[node as usize] = grandparent;
+            reversed ^= self.reversed[node as usize];
+            node = grandparent;
         }
-        let (mut node, mut node_reversed) = (t, reversed);
-        while self.parent[node as usize] != root && node != root {
-            let next = self.parent[node as usize];
-            let next_reversed = node_reversed ^ self.reversed[node as usize];
-            self.parent[node as usize] = root;
-            self.reversed[node as usize] = node_reversed;
-            (node, node_reversed) = (next, next_reversed);
-        }
-        (root, reversed)
     }
 
     /// Records that `a` and `b` share a manifold edge; `differ`: one of them must be reversed relative to
@@ -195,13 +195,14 @@ impl Parts {
         edges.par_chunks_mut(3).zip(tris.par_iter()).enumerate().for_each(|(t, (out, tri))| {
             let keys = tri.map(position_key);
             let hashes = keys.map(position_hash);
+            let area = has_area(keys);
             for k in 0..3 {
-                let hash = if has_area(keys) { mix(hashes[k].wrapping_add(hashes[(k + 1) % 3])) } else { u64::MAX };
+                let hash = if area { mix(hashes[k].wrapping_add(hashes[(k + 1) % 3])) } else { u64::MAX };
                 out[k] = (hash, (3 * t + k) as u32);
             }
         });
         // Only the hash orders: corners with equal hashes are grouped by position below whatever their order.
-        edges.par_sort_unstable_by_key(|e| e.0);
+        let edges = grouped_by_hash(&edges);
         // A run of two corners with the same hash is all but always a manifold edge: note the partners
         // now and check them exactly below. Other runs are split into exact groups here (rare).
         let mut partner = vec![NO_PART; 3 * tris.len()];
@@ -229,10 +230,9 @@ impl Parts {
             if b == NO_PART || b < a {
                 continue;
             }
-            if undirected(tris, a).0 == undirected(tris, b).0 {
-                join_across(tris, &mut union, a, b);
-            } else {
-                unpaired.extend([vec![a], vec![b]]);
+            match same_edge(tris, a, b) {
+                Some(same_direction) => union.join(a / 3, b / 3, same_direction),
+                None => unpaired.extend([vec![a], vec![b]]),
             }
         }
         let sheets = Sheets::of(tris, union);
@@ -301,6 +301,53 @@ impl Parts {
             parts.of[t] = part_of_root[root];
         }
         parts
+    }
+}
+
+/// `edges` with equal hashes (the first field) next to each other. The hashes are uniform, so a counting
+/// sort by their top bits leaves buckets of one or two edges on average, and only a bucket of three or
+/// more needs sorting to bring its equal hashes together: two passes over the edges instead of a
+/// comparison sort.
+fn grouped_by_hash(edges: &[(u64, u32)]) -> Vec<(u64, u32)> {
+    let bits = edges.len().max(2).ilog2().min(24);
+    let bucket = |hash: u64| (hash >> (64 - bits)) as usize;
+    let mut start = vec![0u32; (1 << bits) + 1];
+    for e in edges {
+        start[bucket(e.0) + 1] += 1;
+    }
+    for b in 1..start.len() {
+        start[b] += start[b - 1];
+    }
+    let mut next = start.clone();
+    let mut sorted = vec![(0, 0); edges.len()];
+    for &e in edges {
+        let slot = &mut next[bucket(e.0)];
+        sorted[*slot as usize] = e;
+        *slot += 1;
+    }
+    for b in start.windows(2) {
+        if b[1] - b[0] > 2 {
+            sorted[b[0] as usize..b[1] as usize].sort_unstable_by_key(|e| e.0);
+        }
+    }
+    sorted
+}
+
+/// Whether corners `a` and `b` walk the same edge (`Some`), and if so whether in the same direction. The
+/// coordinates are finite, so comparing them is comparing their position keys.
+fn same_edge(tris: &[GridTriangle], a: u32, b: u32) -> Option<bool> {
+    let ends = |corner: u32| {
+        let t = &tris[corner as usize / 3];
+        let k = corner as usize % 3;
+        (t[k], t[(k + 1) % 3])
+    };
+    let ((a0, a1), (b0, b1)) = (ends(a), ends(b));
+    if a0 == b1 && a1 == b0 {
+        Some(false)
+    } else if a0 == b0 && a1 == b1 {
+        Some(true)
+    } else {
+        None
     }
 }
 
@@ -383,7 +430,7 @@ pub(crate) fn winding_roles(
             &computed
         }
     };
-    let as_in_file: Vec<Role> = tris.par_iter().map(|t| facing_role(t, false)).collect();
+    let as_in_file: Vec<Role> = tris.par_iter().map(facing_role).collect();
     if consistent_as_in_file(columns, &as_in_file) {
         return as_in_file;
     }
@@ -399,10 +446,14 @@ pub(crate) fn winding_roles(
     }
     // Facing inwards in the file: a negative volume.
     let inward: Vec<bool> = volume.iter().map(|&v| v < 0.0).collect();
-    let mut roles: Vec<Role> = tris
-        .par_iter()
+    let mut roles: Vec<Role> = as_in_file
+        .into_par_iter()
         .enumerate()
-        .map(|(t, tri)| if parts.of[t] == NO_PART { Role::Parity } else { facing_role(tri, parts.reversed[t]) })
+        .map(|(t, role)| match (parts.of[t], parts.reversed[t]) {
+            (NO_PART, _) => Role::Parity,
+            (_, reversed) if reversed => role.reversed(),
+            _ => role,
+        })
         .collect();
     if !inward.contains(&true) {
         return roles;
@@ -416,11 +467,11 @@ pub(crate) fn winding_roles(
     roles
 }
 
-/// The winding role of a triangle with its corner order as in the file or `reversed`.
-fn facing_role(t: &GridTriangle, reversed: bool) -> Role {
+/// The winding role of a triangle with its corner order as in the file.
+fn facing_role(t: &GridTriangle) -> Role {
     let xy = |v: DVec3| Coord { x: v.x, y: v.y };
     let faces_up = orient2d(xy(t[0]), xy(t[1]), xy(t[2])) > 0.0;
-    if faces_up ^ reversed { Role::Leaves } else { Role::Enters }
+    if faces_up { Role::Leaves } else { Role::Enters }
 }
 
 /// Whether the triangles as they face in the file already wind consistently as far as any column can
@@ -497,6 +548,25 @@ mod tests {
 
     fn block() -> IndexedMesh {
         cuboid([0.25; 3], [3.75; 3])
+    }
+
+    #[test]
+    fn grouping_by_hash_brings_equal_hashes_together() {
+        // 3000 edges over 700 hashes, spread over the buckets and crowded into one (the top bits alike).
+        let hashes = (0..3000u64).map(|i| match i % 7 {
+            0 => u64::MAX - (i % 5),
+            _ => mix(i % 700),
+        });
+        let edges: Vec<(u64, u32)> = hashes.zip(0..).collect();
+        let grouped = grouped_by_hash(&edges);
+        let mut seen = std::collections::HashSet::new();
+        for run in grouped.chunk_by(|a, b| a.0 == b.0) {
+            assert!(seen.insert(run[0].0), "hash {:x} in two runs", run[0].0);
+        }
+        let (mut a, mut b) = (edges.clone(), grouped);
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b, "the same edges");
     }
 
     #[test]
