@@ -6,8 +6,8 @@ use bevy::input::mouse::MouseButton;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
-use crate::AppSystems;
 use crate::library::LibraryRequest;
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
 
 /// A press shorter than this (and without dragging) is a click, not an orbit.

@@ -113,14 +113,6 @@ impl VoxelSettings {
     }
 }
 
-/// Applies `--style` from the command line.
-fn style_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<VoxelSettings>) {
-    if let Some(style) = args.and_then(|a| a.style) {
-        settings.style = style;
-    }
-}
-
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelSettings>();
-    app.add_systems(PreStartup, style_from_args);
 }

@@ -11,15 +11,14 @@ use bevy::math::Mat3A;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
-use crate::AppSystems;
 use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color,
     placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
 };
-use crate::library::{ModelLibrary, ModelStatus};
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
-use crate::voxelize::VoxelModel;
 
 /// The article's timings (all editable in the panel).
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
@@ -158,11 +157,18 @@ impl VoxelTween {
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct TransitionSystems;
 
+/// Sent when a transition begins (the voxels take off for `model`'s cells).
+#[derive(Message, Debug, Clone, PartialEq)]
+pub struct TransitionStarted {
+    /// The model being morphed to.
+    pub model: AssetId<VoxelModelAsset>,
+}
+
 /// Sent when every voxel of a transition has arrived.
 #[derive(Message, Debug, Clone, PartialEq)]
 pub struct TransitionFinished {
     /// The model now shown.
-    pub model: AssetId<VoxelModel>,
+    pub model: AssetId<VoxelModelAsset>,
 }
 
 /// The transition in progress.
@@ -171,7 +177,7 @@ pub struct ActiveTransition {
     /// Transitions started so far (also the random seed of the next one).
     pub count: u64,
     /// The model being morphed to, and when the last voxel arrives (seconds of transition time).
-    pub running: Option<(AssetId<VoxelModel>, f32)>,
+    pub running: Option<(AssetId<VoxelModelAsset>, f32)>,
     /// Seconds since the transition started (scaled by the speed setting).
     pub elapsed: f32,
     /// The spin: the cloud's angle about y at the start and at the end.
@@ -304,23 +310,23 @@ fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
     mut active: ResMut<ActiveTransition>,
+    mut started: MessageWriter<TransitionStarted>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
     cloud: Query<&Transform, With<VoxelCloud>>,
     mut last_box_size: Local<Option<f32>>,
 ) {
-    let wanted = library.current_entry().filter(|e| e.status == ModelStatus::Ready).and_then(|e| e.voxels.as_ref());
-    let Some((id, model)) = wanted.and_then(|h| models.get(h).map(|m| (h.id(), m))) else { return };
+    let Some((id, model)) = library.current_ready(&models) else { return };
     let resized = last_box_size.is_some_and(|b| b != settings.box_size);
-    if (pool.shown == Some(id) && !resized && !active.restart) || voxels.iter().len() < model.0.voxels.len() {
+    if (pool.shown == Some(id) && !resized && !active.restart) || voxels.iter().len() < model.voxels.len() {
         return;
     }
     active.restart = false;
     *last_box_size = Some(settings.box_size);
-    let new = layout(&model.0, &settings, &transition);
+    let new = layout(model, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
     let unturn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation.inverse());
     let mut slots: Vec<(Entity, u32, SlotState)> = voxels
@@ -356,6 +362,7 @@ fn start(
     active.count += 1;
     active.running = Some((id, end));
     active.elapsed = 0.0;
+    started.write(TransitionStarted { model: id });
 }
 
 /// The voxels in flight, with everything the step writes.
@@ -437,17 +444,10 @@ fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Lo
     *done = true;
 }
 
-/// Applies `--match` from the command line.
-fn assignment_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<TransitionSettings>) {
-    if let Some(assignment) = args.and_then(|a| a.assignment) {
-        settings.assignment = assignment;
-    }
-}
-
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
-    app.add_systems(Startup, assignment_from_args);
     app.init_resource::<ActiveTransition>();
+    app.add_message::<TransitionStarted>();
     app.add_message::<TransitionFinished>();
     app.register_type::<TransitionSettings>();
     app.add_systems(Update, (placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems));

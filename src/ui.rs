@@ -6,10 +6,10 @@ use voxel_core::FillMode;
 
 use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
-use crate::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use crate::library::LibraryRequest;
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
-use crate::voxelize::VoxelModel;
 
 fn status_mark(status: &ModelStatus) -> &'static str {
     match status {
@@ -91,7 +91,7 @@ fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
     });
 }
 
-fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>, pool: &VoxelPool) {
+fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAsset>, pool: &VoxelPool) {
     ui.heading("Current");
     let Some(entry) = library.current_entry() else {
         ui.label("no models");
@@ -110,9 +110,9 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>,
         }
         ModelStatus::Ready => {}
     }
-    if let Some(model) = entry.voxels.as_ref().and_then(|h| models.get(h)) {
-        let s = model.0.stats;
-        ui.label(format!("{} voxels shown ({} filled, {} visible)", model.0.voxels.len(), s.voxels, s.visible));
+    if let Some(model) = entry.latest(models) {
+        let s = model.stats;
+        ui.label(format!("{} voxels shown ({} filled, {} visible)", model.voxels.len(), s.voxels, s.visible));
         ui.label(format!(
             "grid {}×{}×{}, {} triangles, {} colours",
             s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
@@ -127,7 +127,7 @@ fn panel(
     mut contexts: EguiContexts,
     mut settings: ResMut<VoxelSettings>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
     pool: Res<VoxelPool>,
     mut requests: MessageWriter<LibraryRequest>,
     mut over: ResMut<PointerOverUi>,

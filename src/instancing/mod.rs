@@ -12,12 +12,10 @@ use bevy::prelude::*;
 
 pub use material::{VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 
-use crate::AppSystems;
-use crate::library::{ModelLibrary, ModelStatus};
-
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
-use crate::voxelize::VoxelModel;
 
 /// The shared mesh and material of every voxel.
 #[derive(Resource, Debug, Clone)]
@@ -61,7 +59,7 @@ pub struct VoxelPool {
     /// Slots in use (the rest are hidden).
     pub visible: usize,
     /// The model laid out now, if any (none: placeholder boxes).
-    pub shown: Option<AssetId<VoxelModel>>,
+    pub shown: Option<AssetId<VoxelModelAsset>>,
     /// The cloud entity.
     pub cloud: Option<Entity>,
 }
@@ -203,15 +201,10 @@ fn grow_for_current(
     mut pool: ResMut<VoxelPool>,
     assets: Option<Res<VoxelAssets>>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
 ) {
     let Some(assets) = assets else { return };
-    let needed = library
-        .current_entry()
-        .filter(|e| e.status == ModelStatus::Ready)
-        .and_then(|e| e.voxels.as_ref())
-        .and_then(|h| models.get(h))
-        .map_or(0, |m| m.0.voxels.len());
+    let needed = library.current_ready(&models).map_or(0, |(_, m)| m.voxels.len());
     if needed > pool.slots.len() {
         grow_pool(&mut commands, &mut pool, &assets, needed);
     }

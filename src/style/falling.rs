@@ -5,10 +5,9 @@
 use bevy::prelude::*;
 
 use crate::instancing::{VoxelCloud, VoxelPool, VoxelSlot, floor_height};
-use crate::library::ModelLibrary;
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::{ActiveTransition, VoxelTween};
-use crate::voxelize::VoxelModel;
 
 use super::pile::{Pile, PileParams};
 
@@ -24,7 +23,7 @@ pub struct FallingPile {
     /// The voxel entity of each sphere.
     pub entities: Vec<Entity>,
     /// The model the voxels belong to.
-    pub model: AssetId<VoxelModel>,
+    pub model: AssetId<VoxelModelAsset>,
 }
 
 /// Whether the voxels should be falling (the style is on and F has not called them back).
@@ -42,7 +41,7 @@ pub(super) fn control(
     keys: Res<ButtonInput<KeyCode>>,
     settings: Res<VoxelSettings>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
     pool: Res<VoxelPool>,
     mut requested: ResMut<FallRequested>,
     mut active: ResMut<ActiveTransition>,
@@ -95,8 +94,8 @@ pub(super) fn control(
     if shown.is_empty() {
         return;
     }
-    let cell = model.0.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size;
-    let params = PileParams::for_cell(cell, floor_height(&model.0));
+    let cell = model.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size;
+    let params = PileParams::for_cell(cell, floor_height(model));
     let pile = Pile::new(shown.iter().map(|s| s.1).collect(), params, seed.0);
     seed.0 += 1;
     for (i, (entity, _)) in shown.iter().enumerate() {

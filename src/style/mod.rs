@@ -12,8 +12,8 @@ pub mod repel;
 
 use bevy::prelude::*;
 
-use crate::AppSystems;
 use crate::instancing::{VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
+use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
 use bubbles::BubbleSettings;

@@ -1,5 +1,5 @@
 //! Voxelization in the app: loaded glTF assets → triangle soup → the core voxelizer on the
-//! `AsyncComputeTaskPool` → [`VoxelModel`] assets. A settings change re-voxelizes every model; results of
+//! `AsyncComputeTaskPool` → [`VoxelModelAsset`]s. A settings change re-voxelizes every model; results of
 //! stale settings are dropped (latest wins).
 
 pub mod from_gltf;
@@ -11,18 +11,14 @@ use bevy::gltf::{Gltf, GltfMaterial, GltfMesh, GltfNode};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
-use crate::AppSystems;
-use crate::library::{LibrarySystems, ModelLibrary, ModelStatus};
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
 use from_gltf::{GltfAssets, soup_from_gltf};
 
-/// The voxelization systems (in `AppSystems::Simulate`, after the library's).
+/// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct VoxelizeSystems;
-
-/// A voxelized model: the core's output as a Bevy asset.
-#[derive(Asset, TypePath, Debug, Clone)]
-pub struct VoxelModel(pub voxel_core::VoxelModel);
 
 /// Bumped whenever a setting that shapes voxelization changes; models voxelized with an older
 /// generation are redone.
@@ -123,7 +119,7 @@ fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
-    mut models: ResMut<Assets<VoxelModel>>,
+    mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
@@ -135,7 +131,7 @@ fn finish_jobs(
         match result {
             Ok(model) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModel(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;
@@ -147,14 +143,13 @@ fn finish_jobs(
 }
 
 pub(super) fn plugin(app: &mut App) {
-    app.init_asset::<VoxelModel>();
+    app.init_asset::<VoxelModelAsset>();
     app.init_resource::<VoxelizeGeneration>();
     app.add_systems(
         Update,
         (track_settings, read_loaded, start_jobs, finish_jobs)
             .chain()
             .in_set(AppSystems::Simulate)
-            .in_set(VoxelizeSystems)
-            .after(LibrarySystems),
+            .in_set(VoxelizeSystems),
     );
 }

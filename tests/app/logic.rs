@@ -3,20 +3,21 @@
 use std::time::Duration;
 
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
+use voxel_art::config::AppArgs;
 use voxel_art::instancing::VoxelPool;
-use voxel_art::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use voxel_art::library::LibraryRequest;
+use voxel_art::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::settings::VoxelSettings;
-use voxel_art::voxelize::{VoxelModel, VoxelizeGeneration, VoxelizeJob};
+use voxel_art::voxelize::{VoxelizeGeneration, VoxelizeJob};
 
 use crate::harness::{all_settled, core_voxelize, run_until, shipped, tap, temp_file, test_app};
 
 const LIMIT: Duration = Duration::from_secs(60);
 
-pub fn shown_model(app: &App) -> Option<voxel_art::voxel::VoxelModel> {
+pub fn shown_model(app: &App) -> Option<voxel_core::VoxelModel> {
     let library = app.world().resource::<ModelLibrary>();
     let handle = library.current_entry()?.voxels.clone()?;
-    app.world().resource::<Assets<VoxelModel>>().get(&handle).map(|m| m.0.clone())
+    app.world().resource::<Assets<VoxelModelAsset>>().get(&handle).map(|m| voxel_core::VoxelModel::clone(m))
 }
 
 #[test]
@@ -30,11 +31,11 @@ fn a_shipped_model_voxelizes_like_the_core_does() {
     for i in 0..library.entries.len() {
         let library = app.world().resource::<ModelLibrary>();
         let entry = &library.entries[i];
-        let app_model = app.world().resource::<Assets<VoxelModel>>().get(entry.voxels.as_ref().unwrap()).unwrap();
+        let app_model = app.world().resource::<Assets<VoxelModelAsset>>().get(entry.voxels.as_ref().unwrap()).unwrap();
         let core_model = core_voxelize(&shipped(&format!("{}.glb", entry.name)), &options);
         // The Bevy front door (loaded Gltf assets) and the gltf-crate one give the same voxels.
-        assert_eq!(app_model.0.stats, core_model.stats, "{}", entry.name);
-        assert_eq!(app_model.0.voxels.len(), core_model.voxels.len(), "{}", entry.name);
+        assert_eq!(app_model.stats, core_model.stats, "{}", entry.name);
+        assert_eq!(app_model.voxels.len(), core_model.voxels.len(), "{}", entry.name);
     }
 }
 
@@ -45,8 +46,8 @@ fn the_pool_shows_the_current_model_and_hides_spares() {
     // Find the largest and the smallest model.
     let counts: Vec<usize> = {
         let library = app.world().resource::<ModelLibrary>();
-        let models = app.world().resource::<Assets<VoxelModel>>();
-        library.entries.iter().map(|e| models.get(e.voxels.as_ref().unwrap()).unwrap().0.voxels.len()).collect()
+        let models = app.world().resource::<Assets<VoxelModelAsset>>();
+        library.entries.iter().map(|e| models.get(e.voxels.as_ref().unwrap()).unwrap().voxels.len()).collect()
     };
     let largest = (0..counts.len()).max_by_key(|&i| counts[i]).unwrap();
     let smallest = (0..counts.len()).min_by_key(|&i| counts[i]).unwrap();

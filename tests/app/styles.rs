@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
+use voxel_art::config::AppArgs;
 use voxel_art::input::CursorRay;
 use voxel_art::instancing::{VoxelCloud, VoxelHome, VoxelSlot};
 use voxel_art::library::LibraryRequest;

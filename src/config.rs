@@ -1,15 +1,19 @@
-//! The app's command line: `voxel-art [MODEL|FOLDER…] [--screenshot out.png --frames N]`.
+//! The app's command line, `voxel-art [MODEL|FOLDER…] [--style S] [--screenshot out.png --frames N]`, and the
+//! starting configuration it becomes. [`AppArgs::configure`] is the one place that reads the parsed arguments:
+//! it inserts the starting resources the plugins read (no system sees the raw command line).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use bevy::prelude::Resource;
+use bevy::prelude::*;
 use clap::Parser;
 
-use crate::settings::Style;
-use crate::transition::Assignment;
+use crate::library::LibrarySetup;
+use crate::screenshot::ScreenshotPlugin;
+use crate::settings::{Style, VoxelSettings};
+use crate::transition::{Assignment, TransitionSettings};
 
 /// Parsed command line of the app.
-#[derive(Parser, Resource, Clone, Debug, Default)]
+#[derive(Parser, Clone, Debug, Default)]
 #[command(
     name = "voxel-art",
     version,
@@ -50,19 +54,22 @@ impl AppArgs {
             if e.use_stderr() { 2 } else { 0 }
         })
     }
-}
 
-/// The folder holding `models/` and `shaders/`: `BEVY_ASSET_ROOT` or `VOXEL_ART_ASSETS` if set, else
-/// `assets` next to the executable's crate when run through cargo, else `assets` in the current folder.
-pub fn asset_root() -> PathBuf {
-    if let Some(dir) = std::env::var_os("VOXEL_ART_ASSETS") {
-        return PathBuf::from(dir);
+    /// Inserts the starting configuration these arguments ask for: the model list, the style and the
+    /// voxel-to-cell matching (call before the plugins that read them are added).
+    pub fn configure(&self, app: &mut App) {
+        app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
+        app.insert_resource(VoxelSettings { style: self.style.unwrap_or_default(), ..default() });
+        let transition = TransitionSettings::default();
+        app.insert_resource(TransitionSettings {
+            assignment: self.assignment.unwrap_or(transition.assignment),
+            ..transition
+        });
     }
-    let candidates = [
-        std::env::var_os("BEVY_ASSET_ROOT").map(|d| PathBuf::from(d).join("assets")),
-        std::env::var_os("CARGO_MANIFEST_DIR").map(|d| PathBuf::from(d).join("assets")),
-        Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets")),
-        std::env::current_exe().ok().and_then(|e| e.parent().map(|p| p.join("assets"))),
-    ];
-    candidates.into_iter().flatten().find(|p| p.join("models").is_dir()).unwrap_or_else(|| PathBuf::from("assets"))
+
+    /// The `--screenshot` capture, when asked for.
+    pub(crate) fn screenshot_plugin(&self) -> Option<ScreenshotPlugin> {
+        let path = self.screenshot.clone()?;
+        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then })
+    }
 }
