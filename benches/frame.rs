@@ -39,6 +39,8 @@ fn settled(app: &App) -> bool {
 fn app_with(models: Vec<voxel_core::VoxelModel>) -> App {
     let mut app =
         voxel_art::headless::headless_app(&voxel_art::config::AppArgs { no_shipped: true, ..Default::default() });
+    // Show every voxel of the solid models, not only the visible ones.
+    app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().hollow = false;
     app.update();
     let handles: Vec<_> = models
         .into_iter()

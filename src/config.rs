@@ -7,9 +7,10 @@ use std::path::PathBuf;
 use bevy::prelude::*;
 use clap::Parser;
 
+use crate::input::PointerMode;
 use crate::library::LibrarySetup;
 use crate::screenshot::ScreenshotPlugin;
-use crate::settings::{Style, VoxelSettings};
+use crate::settings::Style;
 use crate::transition::{Assignment, TransitionSettings};
 
 /// Parsed command line of the app.
@@ -38,6 +39,10 @@ pub struct AppArgs {
     /// --frames from the switch (a frame of the morph).
     #[arg(long)]
     pub then: Option<usize>,
+    /// With --screenshot: let the pointer (where the window opened: the centre under Xvfb) repel voxels and
+    /// burst bubbles; without it a screenshot ignores the pointer.
+    #[arg(long)]
+    pub repel: bool,
     /// Start in this style (S cycles them).
     #[arg(long, value_enum)]
     pub style: Option<Style>,
@@ -55,11 +60,16 @@ impl AppArgs {
         })
     }
 
-    /// Inserts the starting configuration these arguments ask for: the model list, the style and the
-    /// voxel-to-cell matching (call before the plugins that read them are added).
+    /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
+    /// after `StatesPlugin`), when the pointer counts and the voxel-to-cell matching (call before the plugins that read them are added).
     pub fn configure(&self, app: &mut App) {
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
-        app.insert_resource(VoxelSettings { style: self.style.unwrap_or_default(), ..default() });
+        app.insert_state(self.style.unwrap_or_default());
+        app.insert_resource(match (&self.screenshot, self.repel) {
+            (Some(_), true) => PointerMode::Always,
+            (Some(_), false) => PointerMode::Never,
+            (None, _) => PointerMode::AfterMove,
+        });
         let transition = TransitionSettings::default();
         app.insert_resource(TransitionSettings {
             assignment: self.assignment.unwrap_or(transition.assignment),

@@ -1,7 +1,5 @@
 //! The app without a window or GPU: `MinimalPlugins`, asset and glTF loading, the [`LogicPlugin`], and a
-//! fixed 1/60 s time step. Logic tests and the frame benchmark build on it.
-
-use std::time::Duration;
+//! manual time step of one fixed step a frame. Logic tests and the frame benchmark build on it.
 
 use bevy::image::{CompressedImageFormatSupport, CompressedImageFormats};
 use bevy::prelude::*;
@@ -17,6 +15,7 @@ pub fn headless_app(args: &AppArgs) -> App {
     let asset_plugin = crate::assets::asset_plugin(&mut app);
     app.add_plugins((
         MinimalPlugins.set(crate::threads::task_pools()),
+        bevy::state::app::StatesPlugin,
         TransformPlugin,
         asset_plugin,
         bevy::mesh::MeshPlugin,
@@ -28,7 +27,7 @@ pub fn headless_app(args: &AppArgs) -> App {
     app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
     app.init_resource::<ButtonInput<KeyCode>>();
     app.init_resource::<ButtonInput<MouseButton>>();
-    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
     args.configure(&mut app);
     app.add_plugins(LogicPlugin);
     app.finish();

@@ -6,11 +6,24 @@ use std::sync::Arc;
 
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
-use voxel_core::{TriangleSoup, VoxelModel};
+use voxel_core::{TriangleSoup, Voxel, VoxelModel};
 
-/// A voxelized model as a Bevy asset; it dereferences to the core's [`VoxelModel`].
+/// A voxelized model as a Bevy asset, with every solid voxel (interior ones included); it dereferences to the
+/// core's [`VoxelModel`].
 #[derive(Asset, TypePath, Debug, Clone, Deref)]
 pub struct VoxelModelAsset(pub VoxelModel);
+
+impl VoxelModelAsset {
+    /// The voxels shown: only those that can be seen when `hollow`, else all.
+    pub fn shown(&self, hollow: bool) -> impl Iterator<Item = &Voxel> {
+        self.voxels.iter().filter(move |v| v.visible || !hollow)
+    }
+
+    /// How many voxels are shown.
+    pub fn shown_count(&self, hollow: bool) -> usize {
+        if hollow { self.stats.visible } else { self.voxels.len() }
+    }
+}
 
 /// Where a model is in its life.
 #[derive(Clone, Debug, PartialEq)]

@@ -147,7 +147,8 @@ fn pick(
 pub(super) fn plugin(app: &mut App) {
     app.add_plugins(HierarchyPropagatePlugin::<RenderLayers>::new(PostUpdate));
     app.add_systems(Startup, setup_light);
-    app.add_systems(Update, (spawn_previews, layout_and_turn, pick.in_set(crate::schedule::AppSystems::Input)));
+    app.add_systems(Update, pick.in_set(crate::schedule::AppSystems::Pointer));
+    app.add_systems(Update, (spawn_previews, layout_and_turn).chain().in_set(crate::schedule::AppSystems::Present));
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
 use crate::model::VoxelModelAsset;
 use crate::schedule::AppSystems;
+use crate::settings::VoxelSettings;
 use crate::stage::{Floor, KeyLight};
 use crate::transition::{TransitionFinished, TransitionStarted};
 
@@ -73,6 +74,7 @@ fn probe(
     light: &GlobalTransform,
     floor_y: f32,
     model: Option<&VoxelModelAsset>,
+    hollow: bool,
     window: Vec2,
 ) -> ScreenshotProbe {
     let on_screen = |p: Vec3| {
@@ -84,7 +86,7 @@ fn probe(
     let eye = camera_transform.translation();
     let (centers, radius) = model.map_or((Vec::new(), 0.0), |m| {
         let cell = Vec3::from(m.spec.cell);
-        (m.voxels.iter().map(|v| Vec3::from(m.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
+        (m.shown(hollow).map(|v| Vec3::from(m.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
     });
     // Every voxel centre's shadow on the floor, along the light's direction.
     let dir = light.forward().as_vec3();
@@ -106,7 +108,7 @@ fn probe(
     });
     let model_color = model.and_then(|m| {
         let mut counts = std::collections::HashMap::new();
-        for v in &m.voxels {
+        for v in m.shown(hollow) {
             *counts.entry([v.color[0], v.color[1], v.color[2]]).or_insert(0usize) += 1;
         }
         counts.into_iter().max_by_key(|&(c, n)| (n, c)).map(|(c, _)| c)
@@ -128,12 +130,12 @@ fn sidecar_path(png: &Path) -> PathBuf {
 
 /// Waits for the first model to settle (and, with `then`, for the morph to the next to begin), counts the
 /// frames, then writes the probe and captures the window.
-#[allow(clippy::too_many_arguments)]
 fn drive(
     mut commands: Commands,
     request: Res<ScreenshotPlugin>,
     pool: Res<VoxelPool>,
     models: Res<Assets<VoxelModelAsset>>,
+    settings: Res<VoxelSettings>,
     camera: Query<(&Camera, &GlobalTransform), With<MainCamera>>,
     light: Query<&GlobalTransform, With<KeyLight>>,
     floor: Query<&GlobalTransform, With<Floor>>,
@@ -181,7 +183,8 @@ fn drive(
         (camera.single(), light.single(), floor.single(), window.single())
     {
         let model = pool.shown.and_then(|id| models.get(id));
-        let probe = probe(camera, camera_transform, light, floor.translation().y, model, window.size());
+        let probe =
+            probe(camera, camera_transform, light, floor.translation().y, model, settings.hollow, window.size());
         let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
         if let Err(e) = std::fs::write(sidecar_path(&request.path), json) {
             error!("cannot write the screenshot probe: {e}");
@@ -197,12 +200,10 @@ fn drive(
 
 impl Plugin for ScreenshotPlugin {
     fn build(&self, app: &mut App) {
-        // Time steps exactly 1/60 s a frame, so frame N is the same moment of an animation however slowly a
-        // software renderer draws.
-        app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(std::time::Duration::from_secs_f64(
-            1.0 / 60.0,
-        )));
+        // Time steps exactly one fixed step (1/60 s) a frame, so frame N is the same moment of an animation however
+        // slowly a software renderer draws.
+        app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
         app.insert_resource(self.clone());
-        app.add_systems(Update, drive.in_set(AppSystems::Sync));
+        app.add_systems(Update, drive.in_set(AppSystems::Present));
     }
 }

@@ -176,5 +176,5 @@ fn place_floor(
 pub(super) fn plugin(app: &mut App) {
     // PostStartup: the camera (spawned in Startup) exists, so the backdrop can hang from it.
     app.add_systems(PostStartup, setup);
-    app.add_systems(Update, (follow_camera, place_floor));
+    app.add_systems(Update, (follow_camera, place_floor).chain().in_set(crate::schedule::AppSystems::Present));
 }

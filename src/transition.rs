@@ -171,6 +171,10 @@ pub struct TransitionFinished {
     pub model: AssetId<VoxelModelAsset>,
 }
 
+/// Morph the voxels back to the shown model's cells from wherever they are (after falling).
+#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reassemble;
+
 /// The transition in progress.
 #[derive(Resource, Debug, Default)]
 pub struct ActiveTransition {
@@ -184,8 +188,6 @@ pub struct ActiveTransition {
     pub spin: (f32, f32),
     /// Seconds the spin takes.
     pub spin_duration: f32,
-    /// Set to morph back to the shown model's cells from wherever voxels are (after falling).
-    pub restart: bool,
 }
 
 impl ActiveTransition {
@@ -193,6 +195,11 @@ impl ActiveTransition {
     pub fn angle(&self) -> f32 {
         let t = (self.elapsed / self.spin_duration.max(1e-6)).clamp(0.0, 1.0);
         self.spin.0 + (self.spin.1 - self.spin.0) * t * (2.0 - t)
+    }
+
+    /// The model's rotation now: the cloud's, which voxel transforms are composed with.
+    pub fn turn(&self) -> Quat {
+        Quat::from_rotation_y(self.angle())
     }
 }
 
@@ -227,12 +234,8 @@ pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
 }
 
 /// The layout a model is shown with (ordered per the assignment).
-pub fn layout(
-    model: &voxel_core::VoxelModel,
-    settings: &VoxelSettings,
-    transition: &TransitionSettings,
-) -> Vec<VoxelTarget> {
-    let mut targets = targets_for(model, settings.box_size);
+pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &TransitionSettings) -> Vec<VoxelTarget> {
+    let mut targets = targets_for(model, settings.box_size, settings.hollow);
     order_targets(&mut targets, transition.assignment);
     targets
 }
@@ -241,7 +244,6 @@ pub fn layout(
 type SlotState = (Vec3, Vec3, [u8; 4], bool);
 
 /// Plans the tween of slot `i` from its current state to the new layout.
-#[allow(clippy::too_many_arguments)]
 pub fn plan(
     i: usize,
     now: SlotState,
@@ -305,30 +307,31 @@ pub fn plan(
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
 /// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked.
-#[allow(clippy::too_many_arguments)]
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
     mut active: ResMut<ActiveTransition>,
     mut started: MessageWriter<TransitionStarted>,
+    mut reassemble: MessageReader<Reassemble>,
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
-    cloud: Query<&Transform, With<VoxelCloud>>,
-    mut last_box_size: Local<Option<f32>>,
+    mut last_look: Local<Option<(f32, bool)>>,
 ) {
+    let restart = reassemble.read().count() > 0;
     let Some((id, model)) = library.current_ready(&models) else { return };
-    let resized = last_box_size.is_some_and(|b| b != settings.box_size);
-    if (pool.shown == Some(id) && !resized && !active.restart) || voxels.iter().len() < model.voxels.len() {
+    // A new box size or the hollow switch lays the model out again.
+    let look = (settings.box_size, settings.hollow);
+    let relook = last_look.is_some_and(|l| l != look);
+    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < model.shown_count(settings.hollow) {
         return;
     }
-    active.restart = false;
-    *last_box_size = Some(settings.box_size);
+    *last_look = Some(look);
     let new = layout(model, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
-    let unturn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation.inverse());
+    let unturn = active.turn().inverse();
     let mut slots: Vec<(Entity, u32, SlotState)> = voxels
         .iter()
         .map(|(e, s, t, tag, v)| {
@@ -394,7 +397,7 @@ fn step(
     if active.running.is_some() {
         active.elapsed += dt;
     }
-    let rotation = Quat::from_rotation_y(active.angle());
+    let rotation = active.turn();
     let turn = Mat3A::from_quat(rotation);
     if let Ok(mut cloud) = cloud.single_mut() {
         cloud.rotation = rotation;
@@ -430,6 +433,22 @@ fn step(
     }
 }
 
+/// Placeholder boxes bob gently while nothing is voxelized yet.
+fn float_placeholder(
+    time: Res<Time>,
+    pool: Res<VoxelPool>,
+    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
+) {
+    if pool.shown.is_some() {
+        return;
+    }
+    let t = time.elapsed_secs();
+    for (slot, mut transform) in &mut voxels {
+        let phase = slot.0 as f32 * 0.7;
+        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+    }
+}
+
 /// The placeholder floats until the first model arrives; it is laid out once the pool has grown.
 fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Local<bool>) {
     if *done || pool.shown.is_some() || voxels.iter().len() < PLACEHOLDER_COUNT {
@@ -448,9 +467,13 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
     app.add_message::<TransitionStarted>();
+    app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
     app.register_type::<TransitionSettings>();
-    app.add_systems(Update, (placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems));
+    app.add_systems(
+        Update,
+        (placeholder, float_placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems),
+    );
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
 use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::VoxelSettings;
+use crate::settings::{Style, VoxelSettings};
 use from_gltf::{GltfAssets, soup_from_gltf};
 
 /// The voxelization systems (in `AppSystems::Simulate`).
@@ -39,10 +39,11 @@ pub struct VoxelizeJob {
 /// Starts a new generation when voxelization settings change.
 fn track_settings(
     settings: Res<VoxelSettings>,
+    style: Res<State<Style>>,
     mut generation: ResMut<VoxelizeGeneration>,
     mut last: Local<Option<voxel_core::VoxelizeOptions>>,
 ) {
-    let options = settings.voxelize_options();
+    let options = settings.voxelize_options(*style.get());
     if last.is_some_and(|l| l != options) {
         generation.0 += 1;
     }
@@ -50,7 +51,6 @@ fn track_settings(
 }
 
 /// Reads newly loaded models into triangle soups.
-#[allow(clippy::too_many_arguments)]
 fn read_loaded(
     mut library: ResMut<ModelLibrary>,
     asset_server: Res<AssetServer>,
@@ -87,10 +87,11 @@ fn start_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     settings: Res<VoxelSettings>,
+    style: Res<State<Style>>,
     generation: Res<VoxelizeGeneration>,
     jobs: Query<(Entity, &VoxelizeJob)>,
 ) {
-    let options = settings.voxelize_options();
+    let options = settings.voxelize_options(*style.get());
     let pool = AsyncComputeTaskPool::get();
     for (i, entry) in library.entries.iter_mut().enumerate() {
         let Some(soup) = entry.soup.clone() else { continue };

@@ -62,6 +62,12 @@ pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     path
 }
 
+/// The voxelizer options the app uses now (its settings in its current style).
+pub fn app_options(app: &App) -> voxel_core::VoxelizeOptions {
+    let style = *app.world().resource::<State<voxel_art::settings::Style>>().get();
+    app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style)
+}
+
 /// Voxelizes a file with the core directly (the CLI's front door) for comparison.
 pub fn core_voxelize(path: &Path, options: &voxel_core::VoxelizeOptions) -> voxel_core::VoxelModel {
     let soup = voxel_core::load_file(path).unwrap();
