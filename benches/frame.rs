@@ -8,49 +8,44 @@ use std::time::Instant;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use voxel_art::instancing::{VoxelPool, VoxelSlot};
-use voxel_art::library::{ModelEntry, ModelLibrary, ModelStatus};
+use voxel_art::model::{ModelEntry, ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::transition::ActiveTransition;
-use voxel_art::voxel::shapes::uv_sphere;
-use voxel_art::voxel::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
-use voxel_art::voxelize::VoxelModel;
+use voxel_core::shapes::uv_sphere;
+use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
 
 /// About 100k voxels: a solid sphere 58 cells across.
-fn big_model() -> voxel_art::voxel::VoxelModel {
+fn big_model() -> voxel_core::VoxelModel {
     let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 48), [0.9, 0.5, 0.6, 1.0]);
     voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(58), hollow: false, ..Default::default() })
         .expect("voxelize")
 }
 
 /// About 100k voxels of another shape: a solid cube 46 cells wide.
-fn cube_model() -> voxel_art::voxel::VoxelModel {
-    let soup = TriangleSoup::from_mesh(&voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
+fn cube_model() -> voxel_core::VoxelModel {
+    let soup = TriangleSoup::from_mesh(&voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
     voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(46), hollow: false, ..Default::default() })
         .expect("voxelize")
 }
 
-fn entry(name: &str, handle: Handle<VoxelModel>) -> ModelEntry {
-    ModelEntry {
-        name: name.into(),
-        asset_path: String::new(),
-        gltf: Handle::default(),
-        status: ModelStatus::Ready,
-        soup: None,
-        voxels: Some(handle),
-        voxels_generation: Some(0),
-        voxelize_ms: 0.0,
-    }
+fn entry(name: &str, handle: Handle<VoxelModelAsset>) -> ModelEntry {
+    let entry = ModelEntry::new(name.into(), String::new(), Handle::default(), ModelStatus::Ready);
+    ModelEntry { voxels: Some(handle), voxels_generation: Some(0), ..entry }
 }
 
 fn settled(app: &App) -> bool {
     app.world().resource::<VoxelPool>().shown.is_some() && app.world().resource::<ActiveTransition>().running.is_none()
 }
 
-fn app_with(models: Vec<voxel_art::voxel::VoxelModel>) -> App {
+fn app_with(models: Vec<voxel_core::VoxelModel>) -> App {
     let mut app =
-        voxel_art::headless::headless_app(voxel_art::args::AppArgs { no_shipped: true, ..Default::default() });
+        voxel_art::headless::headless_app(&voxel_art::config::AppArgs { no_shipped: true, ..Default::default() });
+    // Show every voxel of the solid models, not only the visible ones.
+    app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().hollow = false;
     app.update();
-    let handles: Vec<_> =
-        models.into_iter().map(|m| app.world_mut().resource_mut::<Assets<VoxelModel>>().add(VoxelModel(m))).collect();
+    let handles: Vec<_> = models
+        .into_iter()
+        .map(|m| app.world_mut().resource_mut::<Assets<VoxelModelAsset>>().add(VoxelModelAsset(m)))
+        .collect();
     let mut library = app.world_mut().resource_mut::<ModelLibrary>();
     library.entries = handles.into_iter().enumerate().map(|(i, h)| entry(&format!("model {i}"), h)).collect();
     library.current = 0;

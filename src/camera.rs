@@ -52,11 +52,13 @@ fn setup(mut commands: Commands, mut egui_settings: ResMut<EguiGlobalSettings>) 
     ));
 }
 
-/// The cursor's ray through the main camera, or none over the panel and previews.
+/// The cursor's ray through the main camera, or none over the panel and previews and until the pointer acts on
+/// the stage.
 fn cursor_ray(
     window: Query<&Window, With<bevy::window::PrimaryWindow>>,
     camera: Query<(&Camera, &GlobalTransform), With<MainCamera>>,
     over: Res<crate::input::PointerOverUi>,
+    pointer: Res<crate::input::StagePointer>,
     mut ray: ResMut<crate::input::CursorRay>,
 ) {
     let found = (|| {
@@ -64,11 +66,11 @@ fn cursor_ray(
         let (camera, transform) = camera.single().ok()?;
         camera.viewport_to_world(transform, cursor).ok()
     })();
-    ray.set_if_neq(crate::input::CursorRay(found.filter(|_| !over.any())));
+    ray.set_if_neq(crate::input::CursorRay(found.filter(|_| !over.any() && pointer.active)));
 }
 
 pub(super) fn plugin(app: &mut App) {
-    app.add_systems(Update, cursor_ray.in_set(crate::AppSystems::Input));
+    app.add_systems(Update, cursor_ray.in_set(crate::schedule::AppSystems::Input).after(crate::input::track_pointer));
     app.add_plugins(PanOrbitCameraPlugin);
     // The panel is an egui Panel: hovering it must already stop the camera.
     app.insert_resource(EguiFocusIncludesHover(true));

@@ -1,25 +1,23 @@
 //! The app without a window or GPU: `MinimalPlugins`, asset and glTF loading, the [`LogicPlugin`], and a
-//! fixed 1/60 s time step. Logic tests and the frame benchmark build on it.
+//! manual time step of one fixed step a frame. Logic tests and the frame benchmark build on it.
 
-use std::time::Duration;
-
-use bevy::asset::AssetPlugin;
-use bevy::asset::io::AssetSourceBuilder;
 use bevy::image::{CompressedImageFormatSupport, CompressedImageFormats};
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 
-use crate::args::AppArgs;
-use crate::{FILE_SOURCE, LogicPlugin};
+use crate::LogicPlugin;
+use crate::config::AppArgs;
 
-/// A headless app with the logic plugins; input resources are plain (tests press keys by hand).
-pub fn headless_app(args: AppArgs) -> App {
+/// A headless app with the logic plugins, configured by `args` as the app is; input resources are plain
+/// (tests press keys by hand).
+pub fn headless_app(args: &AppArgs) -> App {
     let mut app = App::new();
-    app.register_asset_source(FILE_SOURCE, AssetSourceBuilder::platform_default("/", None));
+    let asset_plugin = crate::assets::asset_plugin(&mut app);
     app.add_plugins((
         MinimalPlugins.set(crate::threads::task_pools()),
+        bevy::state::app::StatesPlugin,
         TransformPlugin,
-        AssetPlugin { file_path: crate::args::asset_root().display().to_string(), ..default() },
+        asset_plugin,
         bevy::mesh::MeshPlugin,
         bevy::image::ImagePlugin::default(),
         bevy::world_serialization::WorldSerializationPlugin,
@@ -29,8 +27,8 @@ pub fn headless_app(args: AppArgs) -> App {
     app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
     app.init_resource::<ButtonInput<KeyCode>>();
     app.init_resource::<ButtonInput<MouseButton>>();
-    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f32(1.0 / 60.0)));
-    app.insert_resource(args);
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
+    args.configure(&mut app);
     app.add_plugins(LogicPlugin);
     app.finish();
     app.cleanup();

@@ -6,9 +6,9 @@ use bevy::input::mouse::MouseButton;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
-use crate::AppSystems;
 use crate::library::LibraryRequest;
-use crate::settings::VoxelSettings;
+use crate::schedule::AppSystems;
+use crate::settings::{PanelOpen, RepelSettings, Style};
 
 /// A press shorter than this (and without dragging) is a click, not an orbit.
 pub const CLICK_MAX_SECONDS: f32 = 0.25;
@@ -31,18 +31,71 @@ impl PointerOverUi {
     }
 }
 
+/// When the pointer acts on the stage (repels voxels, bursts bubbles).
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PointerMode {
+    /// Once it has moved over the stage: a pointer that merely sits where it was when the window opened (Xvfb
+    /// puts it at the window's centre) does not punch a hole into the model.
+    #[default]
+    AfterMove,
+    /// At once, wherever it is (`--screenshot … --repel`).
+    Always,
+    /// Never (`--screenshot` without `--repel`).
+    Never,
+}
+
+/// Whether the pointer acts on the stage now (see [`PointerMode`]).
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq)]
+pub struct StagePointer {
+    /// Where the pointer was first seen in the window.
+    first: Option<Vec2>,
+    /// Whether it acts on the stage.
+    pub active: bool,
+}
+
+impl StagePointer {
+    /// Takes this frame's cursor position (window coordinates; `None` outside the window) and whether it is over
+    /// the panel or a preview.
+    pub fn observe(&mut self, mode: PointerMode, cursor: Option<Vec2>, over_ui: bool) {
+        self.active = match mode {
+            PointerMode::Always => true,
+            PointerMode::Never => false,
+            PointerMode::AfterMove => {
+                self.active
+                    || match (self.first, cursor) {
+                        (None, Some(at)) => {
+                            self.first = Some(at);
+                            false
+                        }
+                        (Some(first), Some(at)) => at != first && !over_ui,
+                        (_, None) => false,
+                    }
+            }
+        };
+    }
+}
+
 /// The ray under the mouse cursor in world space, when the cursor is over the stage (set by the camera).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq)]
 pub struct CursorRay(pub Option<Ray3d>);
+
+/// F: drop the voxels or call them back (the falling style acts on it).
+#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ToggleFall;
 
 /// A click on the stage (a short press and release without dragging), in window coordinates.
 #[derive(Message, Debug, Clone, Copy, PartialEq)]
 pub struct StageClick(pub Vec2);
 
+/// Every key the app answers to.
 fn keys(
     keys: Res<ButtonInput<KeyCode>>,
     mut requests: MessageWriter<LibraryRequest>,
-    mut settings: ResMut<VoxelSettings>,
+    mut panel: ResMut<PanelOpen>,
+    mut repel: ResMut<RepelSettings>,
+    style: Res<State<Style>>,
+    mut next_style: ResMut<NextState<Style>>,
+    mut fall: MessageWriter<ToggleFall>,
     mut exit: MessageWriter<AppExit>,
 ) {
     if keys.just_pressed(KeyCode::ArrowRight) || keys.just_pressed(KeyCode::Space) {
@@ -68,17 +121,33 @@ fn keys(
         }
     }
     if keys.just_pressed(KeyCode::KeyH) {
-        settings.panel_open = !settings.panel_open;
+        panel.0 = !panel.0;
     }
     if keys.just_pressed(KeyCode::KeyS) {
-        settings.style = settings.style.next();
+        next_style.set(style.get().next());
+    }
+    if keys.just_pressed(KeyCode::KeyF) {
+        fall.write(ToggleFall);
     }
     if keys.just_pressed(KeyCode::KeyR) {
-        settings.repel = !settings.repel;
+        repel.enabled = !repel.enabled;
     }
     if keys.just_pressed(KeyCode::Escape) {
         exit.write(AppExit::Success);
     }
+}
+
+/// Follows the pointer to tell when it starts acting on the stage.
+pub(crate) fn track_pointer(
+    window: Query<&Window, With<PrimaryWindow>>,
+    over_ui: Res<PointerOverUi>,
+    mode: Res<PointerMode>,
+    mut pointer: ResMut<StagePointer>,
+) {
+    let cursor = window.single().ok().and_then(Window::cursor_position);
+    let mut next = *pointer;
+    next.observe(*mode, cursor, over_ui.any());
+    pointer.set_if_neq(next);
 }
 
 /// The press being tracked: when and where it started.
@@ -125,6 +194,9 @@ fn click_to_next(mut clicks: MessageReader<StageClick>, mut requests: MessageWri
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<PointerOverUi>();
     app.init_resource::<CursorRay>();
+    app.init_resource::<PointerMode>();
+    app.init_resource::<StagePointer>();
     app.add_message::<StageClick>();
-    app.add_systems(Update, (keys, clicks, click_to_next).chain().in_set(AppSystems::Input));
+    app.add_message::<ToggleFall>();
+    app.add_systems(Update, (track_pointer, keys, clicks, click_to_next).chain().in_set(AppSystems::Input));
 }

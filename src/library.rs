@@ -1,66 +1,30 @@
-//! The model list: shipped models, command-line paths, dropped files; loading state and the current pick.
+//! The library plugin: fills the model list (shipped models, command-line paths, dropped files), handles the
+//! requests that change the pick, and marks files that fail to load.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use bevy::asset::{AssetPath, LoadState};
-use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy::window::FileDragAndDrop;
-use voxel_core::TriangleSoup;
 
-use crate::voxelize::VoxelModel;
-use crate::{AppSystems, FILE_SOURCE};
+use crate::assets::{asset_root, file_asset_path};
+use crate::model::{ModelEntry, ModelLibrary, ModelStatus};
+use crate::schedule::AppSystems;
 
-/// Where a model is in its life.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ModelStatus {
-    /// The asset server is reading it.
-    Loading,
-    /// Loaded; a voxelization task runs.
-    Voxelizing,
-    /// Voxels are available.
-    Ready,
-    /// Loading or voxelizing failed; the reason, for the panel and the log.
-    Failed(String),
+/// The models the list starts with (from the command line).
+#[derive(Resource, Clone, Debug)]
+pub struct LibrarySetup {
+    /// Whether the shipped models (`assets/models`) come first.
+    pub shipped: bool,
+    /// Extra models or folders of models, after the shipped ones.
+    pub extra: Vec<PathBuf>,
+    /// The index of the model shown first.
+    pub start: usize,
 }
 
-/// One model of the list.
-#[derive(Debug)]
-pub struct ModelEntry {
-    /// Display name (file stem).
-    pub name: String,
-    /// The asset path it loads from.
-    pub asset_path: String,
-    /// The loaded glTF (also spawned in its preview).
-    pub gltf: Handle<Gltf>,
-    /// Loading/voxelizing state.
-    pub status: ModelStatus,
-    /// The triangles, read once from the loaded glTF.
-    pub soup: Option<Arc<TriangleSoup>>,
-    /// The latest voxelization.
-    pub voxels: Option<Handle<VoxelModel>>,
-    /// The settings generation `voxels` was made with.
-    pub voxels_generation: Option<u64>,
-    /// How long the latest voxelization took.
-    pub voxelize_ms: f32,
-}
-
-/// The models the app cycles through and which one is shown.
-#[derive(Resource, Debug, Default)]
-pub struct ModelLibrary {
-    /// All models, in list order.
-    pub entries: Vec<ModelEntry>,
-    /// Index of the model shown (or wanted: it may still be voxelizing).
-    pub current: usize,
-    /// The most recent error, for the panel.
-    pub last_error: Option<String>,
-}
-
-impl ModelLibrary {
-    /// The entry shown.
-    pub fn current_entry(&self) -> Option<&ModelEntry> {
-        self.entries.get(self.current)
+impl Default for LibrarySetup {
+    fn default() -> Self {
+        Self { shipped: true, extra: Vec::new(), start: 0 }
     }
 }
 
@@ -81,13 +45,6 @@ pub enum LibraryRequest {
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct LibrarySystems;
 
-/// The asset path for a file on disk (through the `fs` source, so any folder works).
-pub fn file_asset_path(path: &Path) -> String {
-    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
-    let text = absolute.to_string_lossy().replace('\\', "/");
-    format!("{FILE_SOURCE}://{}", text.trim_start_matches('/'))
-}
-
 impl ModelLibrary {
     /// Adds a model by asset path; returns its index.
     pub fn add(&mut self, asset_server: &AssetServer, name: String, asset_path: String) -> usize {
@@ -95,16 +52,7 @@ impl ModelLibrary {
             return i;
         }
         let gltf = asset_server.load(AssetPath::parse(&asset_path).into_owned());
-        self.entries.push(ModelEntry {
-            name,
-            asset_path,
-            gltf,
-            status: ModelStatus::Loading,
-            soup: None,
-            voxels: None,
-            voxels_generation: None,
-            voxelize_ms: 0.0,
-        });
+        self.entries.push(ModelEntry::new(name, asset_path, gltf, ModelStatus::Loading));
         self.entries.len() - 1
     }
 
@@ -136,49 +84,24 @@ impl ModelLibrary {
     fn fail_entry(&mut self, name: String, asset_path: String, reason: String) -> usize {
         warn!("{name}: {reason}");
         self.last_error = Some(format!("{name}: {reason}"));
-        self.entries.push(ModelEntry {
-            name,
-            asset_path,
-            gltf: Handle::default(),
-            status: ModelStatus::Failed(reason),
-            soup: None,
-            voxels: None,
-            voxels_generation: None,
-            voxelize_ms: 0.0,
-        });
+        self.entries.push(ModelEntry::new(name, asset_path, Handle::default(), ModelStatus::Failed(reason)));
         self.entries.len() - 1
-    }
-
-    /// Records that entry `index` failed.
-    pub fn fail(&mut self, index: usize, reason: String) {
-        if let Some(e) = self.entries.get_mut(index) {
-            warn!("{}: {reason}", e.name);
-            self.last_error = Some(format!("{}: {reason}", e.name));
-            e.status = ModelStatus::Failed(reason);
-        }
     }
 }
 
-/// Adds the shipped models (`assets/models`) and the command-line ones.
-fn populate(
-    mut library: ResMut<ModelLibrary>,
-    asset_server: Res<AssetServer>,
-    args: Option<Res<crate::args::AppArgs>>,
-) {
-    let shipped = crate::args::asset_root().join("models");
-    let skip = args.as_ref().is_some_and(|a| a.no_shipped);
-    for file in voxel_core::cli::expand_inputs(&[shipped]).into_iter().filter(|_| !skip) {
+/// Adds the shipped models and the command-line ones.
+fn populate(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>, setup: Res<LibrarySetup>) {
+    let shipped = if setup.shipped { vec![asset_root().join("models")] } else { Vec::new() };
+    for file in voxel_core::cli::expand_inputs(&shipped) {
         if let Some(name) = file.file_name() {
             let stem = file.file_stem().unwrap_or(name).to_string_lossy().into_owned();
             library.add(&asset_server, stem, format!("models/{}", name.to_string_lossy()));
         }
     }
-    if let Some(args) = args {
-        for path in &args.models {
-            library.add_path(&asset_server, path);
-        }
-        library.current = args.start.min(library.entries.len().saturating_sub(1));
+    for path in &setup.extra {
+        library.add_path(&asset_server, path);
     }
+    library.current = setup.start.min(library.entries.len().saturating_sub(1));
 }
 
 fn handle_requests(
@@ -230,6 +153,7 @@ fn watch_loading(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServe
 
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<ModelLibrary>();
+    app.init_resource::<LibrarySetup>();
     app.add_message::<LibraryRequest>();
     app.add_message::<FileDragAndDrop>();
     app.add_systems(Startup, populate);

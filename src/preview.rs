@@ -11,7 +11,8 @@ use bevy::window::PrimaryWindow;
 use bevy::world_serialization::WorldAssetRoot;
 
 use crate::input::PointerOverUi;
-use crate::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use crate::library::LibraryRequest;
+use crate::model::{ModelLibrary, ModelStatus};
 
 /// Previews get render layers 1..=MAX_PREVIEWS (layer 0 is the stage).
 pub const MAX_PREVIEWS: usize = 24;
@@ -146,7 +147,8 @@ fn pick(
 pub(super) fn plugin(app: &mut App) {
     app.add_plugins(HierarchyPropagatePlugin::<RenderLayers>::new(PostUpdate));
     app.add_systems(Startup, setup_light);
-    app.add_systems(Update, (spawn_previews, layout_and_turn, pick.in_set(crate::AppSystems::Input)));
+    app.add_systems(Update, pick.in_set(crate::schedule::AppSystems::Pointer));
+    app.add_systems(Update, (spawn_previews, layout_and_turn).chain().in_set(crate::schedule::AppSystems::Present));
 }
 
 #[cfg(test)]

@@ -9,20 +9,34 @@ use std::path::{Path, PathBuf};
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 
-use crate::args::AppArgs;
 use crate::camera::MainCamera;
 use crate::instancing::VoxelPool;
-use crate::library::{LibraryRequest, ModelLibrary};
+use crate::library::LibraryRequest;
+use crate::model::VoxelModelAsset;
+use crate::schedule::AppSystems;
+use crate::settings::VoxelSettings;
 use crate::stage::{Floor, KeyLight};
-use crate::transition::ActiveTransition;
-use crate::voxelize::VoxelModel;
+use crate::transition::{TransitionFinished, TransitionStarted};
 
 /// Frames allowed for the first model to appear before giving up.
 const MAX_WAIT_FRAMES: u32 = 3_000;
 
+/// `--screenshot`: what to capture and when.
+#[derive(Resource, Clone, Debug)]
+pub struct ScreenshotPlugin {
+    /// The PNG to write (the probe goes next to it, `.json` appended).
+    pub path: PathBuf,
+    /// Frames to run once the first model has settled (or, with `then`, from the switch).
+    pub frames: u32,
+    /// Switch to this model once the first has settled, and capture a frame of the morph.
+    pub then: Option<usize>,
+}
+
+/// How far the capture has got.
 #[derive(Default)]
 struct Progress {
     waited: u32,
+    settled: bool,
     switched: bool,
     counting: bool,
     frames: u32,
@@ -59,7 +73,8 @@ fn probe(
     camera_transform: &GlobalTransform,
     light: &GlobalTransform,
     floor_y: f32,
-    model: Option<&VoxelModel>,
+    model: Option<&VoxelModelAsset>,
+    hollow: bool,
     window: Vec2,
 ) -> ScreenshotProbe {
     let on_screen = |p: Vec3| {
@@ -70,8 +85,8 @@ fn probe(
     };
     let eye = camera_transform.translation();
     let (centers, radius) = model.map_or((Vec::new(), 0.0), |m| {
-        let cell = Vec3::from(m.0.spec.cell);
-        (m.0.voxels.iter().map(|v| Vec3::from(m.0.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
+        let cell = Vec3::from(m.spec.cell);
+        (m.shown(hollow).map(|v| Vec3::from(m.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
     });
     // Every voxel centre's shadow on the floor, along the light's direction.
     let dir = light.forward().as_vec3();
@@ -93,7 +108,7 @@ fn probe(
     });
     let model_color = model.and_then(|m| {
         let mut counts = std::collections::HashMap::new();
-        for v in &m.0.voxels {
+        for v in m.shown(hollow) {
             *counts.entry([v.color[0], v.color[1], v.color[2]]).or_insert(0usize) += 1;
         }
         counts.into_iter().max_by_key(|&(c, n)| (n, c)).map(|(c, _)| c)
@@ -113,39 +128,41 @@ fn sidecar_path(png: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Waits for the first model to settle (and, with `then`, for the morph to the next to begin), counts the
+/// frames, then writes the probe and captures the window.
 fn drive(
     mut commands: Commands,
-    args: Res<AppArgs>,
+    request: Res<ScreenshotPlugin>,
     pool: Res<VoxelPool>,
-    library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
+    settings: Res<VoxelSettings>,
     camera: Query<(&Camera, &GlobalTransform), With<MainCamera>>,
     light: Query<&GlobalTransform, With<KeyLight>>,
     floor: Query<&GlobalTransform, With<Floor>>,
     window: Query<&Window>,
-    active: Res<ActiveTransition>,
+    mut started: MessageReader<TransitionStarted>,
+    mut finished: MessageReader<TransitionFinished>,
     mut requests: MessageWriter<LibraryRequest>,
     mut progress: Local<Progress>,
     mut exit: MessageWriter<AppExit>,
 ) {
-    let Some(path) = &args.screenshot else { return };
     if progress.requested {
         return;
     }
+    let morph_began = started.read().count() > 0;
+    progress.settled |= finished.read().count() > 0;
     if !progress.counting {
-        let settled = pool.shown.is_some() && active.running.is_none();
         // Wait for the first model to settle; with --then, switch and wait for the morph to begin.
-        let ready = match args.then {
-            None => settled,
+        let ready = match request.then {
+            None => progress.settled,
             Some(next) if !progress.switched => {
-                if settled {
+                if progress.settled {
                     requests.write(LibraryRequest::Select(next));
                     progress.switched = true;
                 }
                 false
             }
-            Some(_) => active.running.is_some(),
+            Some(_) => morph_began,
         };
         if !ready {
             progress.waited += 1;
@@ -158,28 +175,35 @@ fn drive(
         progress.counting = true;
     }
     progress.frames += 1;
-    if progress.frames < args.frames {
+    if progress.frames < request.frames {
         return;
     }
     progress.requested = true;
     if let (Ok((camera, camera_transform)), Ok(light), Ok(floor), Ok(window)) =
         (camera.single(), light.single(), floor.single(), window.single())
     {
-        let model = library.current_entry().and_then(|e| e.voxels.as_ref()).and_then(|h| models.get(h));
-        let probe = probe(camera, camera_transform, light, floor.translation().y, model, window.size());
+        let model = pool.shown.and_then(|id| models.get(id));
+        let probe =
+            probe(camera, camera_transform, light, floor.translation().y, model, settings.hollow, window.size());
         let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
-        if let Err(e) = std::fs::write(sidecar_path(path), json) {
+        if let Err(e) = std::fs::write(sidecar_path(&request.path), json) {
             error!("cannot write the screenshot probe: {e}");
         }
     }
-    info!("saving screenshot to {}", path.display());
-    commands.spawn(Screenshot::primary_window()).observe(save_to_disk(path.clone())).observe(
+    info!("saving screenshot to {}", request.path.display());
+    commands.spawn(Screenshot::primary_window()).observe(save_to_disk(request.path.clone())).observe(
         |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
             exit.write(AppExit::Success);
         },
     );
 }
 
-pub(super) fn plugin(app: &mut App) {
-    app.add_systems(Update, drive);
+impl Plugin for ScreenshotPlugin {
+    fn build(&self, app: &mut App) {
+        // Time steps exactly one fixed step (1/60 s) a frame, so frame N is the same moment of an animation however
+        // slowly a software renderer draws.
+        app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
+        app.insert_resource(self.clone());
+        app.add_systems(Update, drive.in_set(AppSystems::Present));
+    }
 }

@@ -3,8 +3,9 @@
 use bevy::prelude::*;
 use voxel_core::{FillMode, GridSize, VoxelizeOptions};
 
-/// How voxels look and move.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect, clap::ValueEnum)]
+/// How voxels look and move: a Bevy state. Each style sets itself up on entering it and tears itself down on
+/// leaving (see the `style` plugin); S cycles them, the panel picks one, `--style` starts in one.
+#[derive(States, Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect, clap::ValueEnum)]
 pub enum Style {
     /// Rounded boxes (the article's look).
     #[default]
@@ -44,7 +45,7 @@ impl Style {
     }
 }
 
-/// Parameters of voxelization and of the voxels' look.
+/// Parameters of voxelization and of the voxels' look and pace.
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
 #[reflect(Resource)]
 pub struct VoxelSettings {
@@ -53,7 +54,7 @@ pub struct VoxelSettings {
     /// Fill mode: winding (default), parity, flood or surface only.
     #[reflect(ignore)]
     pub fill: FillMode,
-    /// Keep only voxels that can be seen (drops hidden interior voxels).
+    /// Show only the voxels that can be seen (the model keeps its interior: falling drops it too).
     pub hollow: bool,
     /// The article's pastel colour remap.
     pub pastel: bool,
@@ -63,16 +64,6 @@ pub struct VoxelSettings {
     pub roundness: f32,
     /// Animation speed multiplier.
     pub speed: f32,
-    /// Voxel style.
-    pub style: Style,
-    /// Whether the side panel shows.
-    pub panel_open: bool,
-    /// Voxels near the cursor are pushed away (R toggles).
-    pub repel: bool,
-    /// Repel radius around the cursor ray, in model units.
-    pub repel_radius: f32,
-    /// How far a voxel on the ray is pushed, as a fraction of the radius.
-    pub repel_strength: f32,
 }
 
 impl Default for VoxelSettings {
@@ -85,11 +76,6 @@ impl Default for VoxelSettings {
             box_size: 1.0,
             roundness: 0.125,
             speed: 1.0,
-            style: Style::RoundedBoxes,
-            panel_open: true,
-            repel: true,
-            repel_radius: 1.2,
-            repel_strength: 0.8,
         }
     }
 }
@@ -98,13 +84,14 @@ impl VoxelSettings {
     /// The smallest and largest grid sizes the panel offers.
     pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.08..=0.6;
 
-    /// The voxelizer options these settings ask for.
-    pub fn voxelize_options(&self) -> VoxelizeOptions {
+    /// The voxelizer options these settings ask for in `style`.
+    pub fn voxelize_options(&self, style: Style) -> VoxelizeOptions {
         VoxelizeOptions {
             grid: GridSize::Cell(self.grid_size.clamp(*Self::GRID_RANGE.start(), *Self::GRID_RANGE.end())),
-            cell_height_ratio: self.style.cell_height_ratio(),
+            cell_height_ratio: style.cell_height_ratio(),
             fill: self.fill,
-            hollow: self.hollow,
+            // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
+            hollow: false,
             pastel: self.pastel,
             // The app keeps voxel counts interactive: at most 4 M cells in a grid.
             max_cells: 1 << 22,
@@ -113,14 +100,40 @@ impl VoxelSettings {
     }
 }
 
-/// Applies `--style` from the command line.
-fn style_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<VoxelSettings>) {
-    if let Some(style) = args.and_then(|a| a.style) {
-        settings.style = style;
+/// Mouse repel: voxels near the cursor ray are pushed away.
+#[derive(Resource, Clone, Debug, PartialEq, Reflect)]
+#[reflect(Resource)]
+pub struct RepelSettings {
+    /// Whether the cursor repels voxels (R toggles).
+    pub enabled: bool,
+    /// Radius around the cursor ray, in model units (bubbles burst within 0.6 of it).
+    pub radius: f32,
+    /// How far a voxel on the ray is pushed, as a fraction of the radius.
+    pub strength: f32,
+}
+
+impl Default for RepelSettings {
+    fn default() -> Self {
+        Self { enabled: true, radius: 1.2, strength: 0.8 }
+    }
+}
+
+/// Whether the side panel shows (H toggles): UI state, not a setting of the voxels.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PanelOpen(pub bool);
+
+impl Default for PanelOpen {
+    fn default() -> Self {
+        Self(true)
     }
 }
 
 pub(super) fn plugin(app: &mut App) {
+    app.init_resource::<RepelSettings>();
+    app.init_resource::<PanelOpen>();
     app.init_resource::<VoxelSettings>();
-    app.add_systems(PreStartup, style_from_args);
+    // The starting style may have been set by the command line already (`AppArgs::configure`).
+    if !app.world().contains_resource::<State<Style>>() {
+        app.init_state::<Style>();
+    }
 }

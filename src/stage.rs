@@ -8,8 +8,8 @@ use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::*;
 
 use crate::camera::MainCamera;
-use crate::library::ModelLibrary;
-use crate::voxelize::VoxelModel;
+use crate::instancing::{VoxelPool, floor_height};
+use crate::model::VoxelModelAsset;
 
 /// Top colour of the background gradient (pink to lilac, like the article's demo).
 pub const GRADIENT_TOP: Color = Color::srgb(0.99, 0.80, 0.86);
@@ -160,20 +160,15 @@ fn follow_camera(
     rig.rotation = Quat::from_rotation_y(yaw);
 }
 
-/// The floor settles just under the current model.
+/// The floor settles just under the model shown.
 fn place_floor(
-    library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    pool: Res<VoxelPool>,
+    models: Res<Assets<VoxelModelAsset>>,
     time: Res<Time>,
     mut floor: Query<&mut Transform, With<Floor>>,
 ) {
     let Ok(mut floor) = floor.single_mut() else { return };
-    let bottom = library
-        .current_entry()
-        .and_then(|e| e.voxels.as_ref())
-        .and_then(|h| models.get(h))
-        .map_or(-4.5, |m| crate::instancing::floor_height(&m.0));
-    let target = bottom;
+    let target = pool.shown.and_then(|id| models.get(id)).map_or(-4.5, |m| floor_height(m));
     let k = 1.0 - (-4.0 * time.delta_secs()).exp();
     floor.translation.y += (target - floor.translation.y) * k;
 }
@@ -181,5 +176,5 @@ fn place_floor(
 pub(super) fn plugin(app: &mut App) {
     // PostStartup: the camera (spawned in Startup) exists, so the backdrop can hang from it.
     app.add_systems(PostStartup, setup);
-    app.add_systems(Update, (follow_camera, place_floor));
+    app.add_systems(Update, (follow_camera, place_floor).chain().in_set(crate::schedule::AppSystems::Present));
 }

@@ -11,15 +11,14 @@ use bevy::math::Mat3A;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
-use crate::AppSystems;
 use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color,
     placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
 };
-use crate::library::{ModelLibrary, ModelStatus};
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
-use crate::voxelize::VoxelModel;
 
 /// The article's timings (all editable in the panel).
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
@@ -158,12 +157,23 @@ impl VoxelTween {
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct TransitionSystems;
 
+/// Sent when a transition begins (the voxels take off for `model`'s cells).
+#[derive(Message, Debug, Clone, PartialEq)]
+pub struct TransitionStarted {
+    /// The model being morphed to.
+    pub model: AssetId<VoxelModelAsset>,
+}
+
 /// Sent when every voxel of a transition has arrived.
 #[derive(Message, Debug, Clone, PartialEq)]
 pub struct TransitionFinished {
     /// The model now shown.
-    pub model: AssetId<VoxelModel>,
+    pub model: AssetId<VoxelModelAsset>,
 }
+
+/// Morph the voxels back to the shown model's cells from wherever they are (after falling).
+#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Reassemble;
 
 /// The transition in progress.
 #[derive(Resource, Debug, Default)]
@@ -171,15 +181,13 @@ pub struct ActiveTransition {
     /// Transitions started so far (also the random seed of the next one).
     pub count: u64,
     /// The model being morphed to, and when the last voxel arrives (seconds of transition time).
-    pub running: Option<(AssetId<VoxelModel>, f32)>,
+    pub running: Option<(AssetId<VoxelModelAsset>, f32)>,
     /// Seconds since the transition started (scaled by the speed setting).
     pub elapsed: f32,
     /// The spin: the cloud's angle about y at the start and at the end.
     pub spin: (f32, f32),
     /// Seconds the spin takes.
     pub spin_duration: f32,
-    /// Set to morph back to the shown model's cells from wherever voxels are (after falling).
-    pub restart: bool,
 }
 
 impl ActiveTransition {
@@ -187,6 +195,11 @@ impl ActiveTransition {
     pub fn angle(&self) -> f32 {
         let t = (self.elapsed / self.spin_duration.max(1e-6)).clamp(0.0, 1.0);
         self.spin.0 + (self.spin.1 - self.spin.0) * t * (2.0 - t)
+    }
+
+    /// The model's rotation now: the cloud's, which voxel transforms are composed with.
+    pub fn turn(&self) -> Quat {
+        Quat::from_rotation_y(self.angle())
     }
 }
 
@@ -221,12 +234,8 @@ pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
 }
 
 /// The layout a model is shown with (ordered per the assignment).
-pub fn layout(
-    model: &voxel_core::VoxelModel,
-    settings: &VoxelSettings,
-    transition: &TransitionSettings,
-) -> Vec<VoxelTarget> {
-    let mut targets = targets_for(model, settings.box_size);
+pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &TransitionSettings) -> Vec<VoxelTarget> {
+    let mut targets = targets_for(model, settings.box_size, settings.hollow);
     order_targets(&mut targets, transition.assignment);
     targets
 }
@@ -235,7 +244,6 @@ pub fn layout(
 type SlotState = (Vec3, Vec3, [u8; 4], bool);
 
 /// Plans the tween of slot `i` from its current state to the new layout.
-#[allow(clippy::too_many_arguments)]
 pub fn plan(
     i: usize,
     now: SlotState,
@@ -299,30 +307,31 @@ pub fn plan(
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
 /// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked.
-#[allow(clippy::too_many_arguments)]
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
     mut active: ResMut<ActiveTransition>,
+    mut started: MessageWriter<TransitionStarted>,
+    mut reassemble: MessageReader<Reassemble>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
-    cloud: Query<&Transform, With<VoxelCloud>>,
-    mut last_box_size: Local<Option<f32>>,
+    mut last_look: Local<Option<(f32, bool)>>,
 ) {
-    let wanted = library.current_entry().filter(|e| e.status == ModelStatus::Ready).and_then(|e| e.voxels.as_ref());
-    let Some((id, model)) = wanted.and_then(|h| models.get(h).map(|m| (h.id(), m))) else { return };
-    let resized = last_box_size.is_some_and(|b| b != settings.box_size);
-    if (pool.shown == Some(id) && !resized && !active.restart) || voxels.iter().len() < model.0.voxels.len() {
+    let restart = reassemble.read().count() > 0;
+    let Some((id, model)) = library.current_ready(&models) else { return };
+    // A new box size or the hollow switch lays the model out again.
+    let look = (settings.box_size, settings.hollow);
+    let relook = last_look.is_some_and(|l| l != look);
+    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < model.shown_count(settings.hollow) {
         return;
     }
-    active.restart = false;
-    *last_box_size = Some(settings.box_size);
-    let new = layout(&model.0, &settings, &transition);
+    *last_look = Some(look);
+    let new = layout(model, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
-    let unturn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation.inverse());
+    let unturn = active.turn().inverse();
     let mut slots: Vec<(Entity, u32, SlotState)> = voxels
         .iter()
         .map(|(e, s, t, tag, v)| {
@@ -356,6 +365,7 @@ fn start(
     active.count += 1;
     active.running = Some((id, end));
     active.elapsed = 0.0;
+    started.write(TransitionStarted { model: id });
 }
 
 /// The voxels in flight, with everything the step writes.
@@ -387,7 +397,7 @@ fn step(
     if active.running.is_some() {
         active.elapsed += dt;
     }
-    let rotation = Quat::from_rotation_y(active.angle());
+    let rotation = active.turn();
     let turn = Mat3A::from_quat(rotation);
     if let Ok(mut cloud) = cloud.single_mut() {
         cloud.rotation = rotation;
@@ -423,6 +433,22 @@ fn step(
     }
 }
 
+/// Placeholder boxes bob gently while nothing is voxelized yet.
+fn float_placeholder(
+    time: Res<Time>,
+    pool: Res<VoxelPool>,
+    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
+) {
+    if pool.shown.is_some() {
+        return;
+    }
+    let t = time.elapsed_secs();
+    for (slot, mut transform) in &mut voxels {
+        let phase = slot.0 as f32 * 0.7;
+        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+    }
+}
+
 /// The placeholder floats until the first model arrives; it is laid out once the pool has grown.
 fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Local<bool>) {
     if *done || pool.shown.is_some() || voxels.iter().len() < PLACEHOLDER_COUNT {
@@ -437,20 +463,17 @@ fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Lo
     *done = true;
 }
 
-/// Applies `--match` from the command line.
-fn assignment_from_args(args: Option<Res<crate::args::AppArgs>>, mut settings: ResMut<TransitionSettings>) {
-    if let Some(assignment) = args.and_then(|a| a.assignment) {
-        settings.assignment = assignment;
-    }
-}
-
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
-    app.add_systems(Startup, assignment_from_args);
     app.init_resource::<ActiveTransition>();
+    app.add_message::<TransitionStarted>();
+    app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
     app.register_type::<TransitionSettings>();
-    app.add_systems(Update, (placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems));
+    app.add_systems(
+        Update,
+        (placeholder, float_placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems),
+    );
 }
 
 #[cfg(test)]

@@ -6,10 +6,10 @@ use voxel_core::FillMode;
 
 use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
-use crate::library::{LibraryRequest, ModelLibrary, ModelStatus};
-use crate::settings::{Style, VoxelSettings};
+use crate::library::LibraryRequest;
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::settings::{PanelOpen, RepelSettings, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
-use crate::voxelize::VoxelModel;
 
 fn status_mark(status: &ModelStatus) -> &'static str {
     match status {
@@ -42,11 +42,11 @@ fn model_list(ui: &mut egui::Ui, library: &ModelLibrary, requests: &mut MessageW
     ui.label(egui::RichText::new("Drop .glb/.gltf files on the window to add them.").small());
 }
 
-fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
+fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style, repel: &mut RepelSettings) {
     ui.heading("Voxels");
-    egui::ComboBox::from_label("style").selected_text(settings.style.label()).show_ui(ui, |ui| {
-        for style in Style::ALL {
-            ui.selectable_value(&mut settings.style, style, style.label());
+    egui::ComboBox::from_label("style").selected_text(style.label()).show_ui(ui, |ui| {
+        for choice in Style::ALL {
+            ui.selectable_value(style, choice, choice.label());
         }
     });
     ui.add(egui::Slider::new(&mut settings.grid_size, VoxelSettings::GRID_RANGE).text("grid size").logarithmic(true));
@@ -62,10 +62,10 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings) {
     });
     ui.checkbox(&mut settings.hollow, "hollow (only visible voxels)");
     ui.checkbox(&mut settings.pastel, "pastel colours");
-    ui.checkbox(&mut settings.repel, "mouse repel (R)");
-    ui.add_enabled(settings.repel, egui::Slider::new(&mut settings.repel_radius, 0.2..=4.0).text("repel radius"));
-    ui.add_enabled(settings.repel, egui::Slider::new(&mut settings.repel_strength, 0.0..=2.0).text("repel strength"));
-    if settings.style == Style::Falling {
+    ui.checkbox(&mut repel.enabled, "mouse repel (R)");
+    ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.radius, 0.2..=4.0).text("repel radius"));
+    ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.strength, 0.0..=2.0).text("repel strength"));
+    if *style == Style::Falling {
         ui.label("F: drop / reassemble");
     }
 }
@@ -92,7 +92,7 @@ fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
     });
 }
 
-fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>, pool: &VoxelPool) {
+fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAsset>, pool: &VoxelPool, hollow: bool) {
     ui.heading("Current");
     let Some(entry) = library.current_entry() else {
         ui.label("no models");
@@ -111,9 +111,10 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>,
         }
         ModelStatus::Ready => {}
     }
-    if let Some(model) = entry.voxels.as_ref().and_then(|h| models.get(h)) {
-        let s = model.0.stats;
-        ui.label(format!("{} voxels shown ({} filled, {} visible)", model.0.voxels.len(), s.voxels, s.visible));
+    if let Some(model) = entry.latest(models) {
+        let s = model.stats;
+        let shown = model.shown_count(hollow);
+        ui.label(format!("{shown} voxels shown ({} filled, {} visible)", s.voxels, s.visible));
         ui.label(format!(
             "grid {}×{}×{}, {} triangles, {} colours",
             s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
@@ -123,12 +124,15 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModel>,
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));
 }
 
-#[allow(clippy::too_many_arguments)]
 fn panel(
     mut contexts: EguiContexts,
     mut settings: ResMut<VoxelSettings>,
+    mut repel: ResMut<RepelSettings>,
+    panel_open: Res<PanelOpen>,
+    style: Res<State<Style>>,
+    mut next_style: ResMut<NextState<Style>>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
     pool: Res<VoxelPool>,
     mut requests: MessageWriter<LibraryRequest>,
     mut over: ResMut<PointerOverUi>,
@@ -137,7 +141,7 @@ fn panel(
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
     over.panel = ctx.is_pointer_over_egui() || ctx.egui_wants_pointer_input();
-    if !settings.panel_open {
+    if !panel_open.0 {
         return Ok(());
     }
     let mut root = egui::Ui::new(
@@ -146,19 +150,21 @@ fn panel(
         egui::UiBuilder::new().layer_id(egui::LayerId::background()).max_rect(ctx.viewport_rect()),
     );
     let mut edited = settings.clone();
+    let mut chosen = *style.get();
+    let mut edited_repel = repel.clone();
     egui::Panel::left("voxel-art panel").resizable(false).exact_size(270.0).show_inside(&mut root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("voxel-art");
             model_list(ui, &library, &mut requests);
             ui.separator();
-            parameters(ui, &mut edited);
+            parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
             let mut edited_transition = transition.clone();
             transition_settings(ui, &mut edited_transition);
             if edited_transition != *transition {
                 *transition = edited_transition;
             }
             ui.separator();
-            stats(ui, &library, &models, &pool);
+            stats(ui, &library, &models, &pool, settings.hollow);
             if let Some(error) = &library.last_error {
                 ui.separator();
                 ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
@@ -170,6 +176,12 @@ fn panel(
     // Only touch the resource when something changed, so change detection means "edited".
     if edited != *settings {
         *settings = edited;
+    }
+    if edited_repel != *repel {
+        *repel = edited_repel;
+    }
+    if chosen != *style.get() {
+        next_style.set(chosen);
     }
     Ok(())
 }

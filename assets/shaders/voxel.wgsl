@@ -8,15 +8,11 @@
 }
 #import bevy_render::color_operations::srgb_to_linear
 
-struct VoxelParams { params: vec4<f32> }
-@group(#{MATERIAL_BIND_GROUP}) @binding(100) var<uniform> voxel: VoxelParams;
-
 @fragment
 fn fragment(in: VertexOutput, @builtin(front_facing) is_front: bool) -> FragmentOutput {
     var pbr_input = pbr_input_from_standard_material(in, is_front);
     let c = unpack4x8unorm(mesh_functions::get_tag(in.instance_index));
-    let tag_color = vec4(srgb_to_linear(c.rgb), 1.0);
-    pbr_input.material.base_color = pbr_input.material.base_color * mix(vec4(1.0), tag_color, voxel.params.x);
+    pbr_input.material.base_color = pbr_input.material.base_color * vec4(srgb_to_linear(c.rgb), 1.0);
     pbr_input.material.base_color = alpha_discard(pbr_input.material, pbr_input.material.base_color);
     var out: FragmentOutput;
     out.color = apply_pbr_lighting(pbr_input);

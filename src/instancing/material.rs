@@ -8,13 +8,9 @@ use bevy::shader::ShaderRef;
 /// The one material every voxel shares (one batch).
 pub type VoxelMaterial = ExtendedMaterial<StandardMaterial, VoxelExtension>;
 
-/// Extension data; the colour itself comes per instance from `MeshTag`.
+/// The extension: no data of its own, only the fragment shader (the colour comes per instance from `MeshTag`).
 #[derive(Asset, AsBindGroup, Reflect, Debug, Clone, Default)]
-pub struct VoxelExtension {
-    /// Reserved per-material parameters (x: colour mix strength, 1 = tag colour).
-    #[uniform(100)]
-    pub params: Vec4,
-}
+pub struct VoxelExtension {}
 
 impl MaterialExtension for VoxelExtension {
     fn fragment_shader() -> ShaderRef {
@@ -36,6 +32,6 @@ pub fn unpack_color(tag: u32) -> [u8; 4] {
 pub fn voxel_material() -> VoxelMaterial {
     ExtendedMaterial {
         base: StandardMaterial { base_color: Color::WHITE, perceptual_roughness: 0.55, reflectance: 0.35, ..default() },
-        extension: VoxelExtension { params: Vec4::new(1.0, 0.0, 0.0, 0.0) },
+        extension: VoxelExtension {},
     }
 }

@@ -12,20 +12,31 @@ use bevy::prelude::*;
 
 pub use material::{VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 
-use crate::AppSystems;
-use crate::library::{ModelLibrary, ModelStatus};
+use voxel_core::Voxel;
 
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
+use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
-use crate::voxelize::VoxelModel;
 
-/// The shared mesh and material of every voxel.
+/// The shared mesh and material of every voxel (made when the plugin is built, so styles can dress them from
+/// the first state transition on).
 #[derive(Resource, Debug, Clone)]
 pub struct VoxelAssets {
-    /// The voxel shape (rounded box).
+    /// The voxel shape (the style's: a rounded box to start with).
     pub mesh: Handle<Mesh>,
     /// The one material.
     pub material: Handle<VoxelMaterial>,
+}
+
+impl FromWorld for VoxelAssets {
+    fn from_world(world: &mut World) -> Self {
+        let roundness =
+            world.get_resource::<VoxelSettings>().map_or(VoxelSettings::default().roundness, |s| s.roundness);
+        let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh::rounded_box(roundness, 2));
+        let material = world.resource_mut::<Assets<VoxelMaterial>>().add(voxel_material());
+        Self { mesh, material }
+    }
 }
 
 /// The model's frame: its rotation is the model's spin. Voxels are not its children (a hierarchy of 100k
@@ -49,6 +60,10 @@ pub fn voxel_global(turn: Mat3A, scale: Vec3, translation: Vec3) -> GlobalTransf
     })
 }
 
+/// The pool's systems (growing it for the model to show, in `AppSystems::Simulate` after voxelization).
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct InstancingSystems;
+
 /// A voxel entity and its index in the pool.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
 pub struct VoxelSlot(pub u32);
@@ -61,9 +76,7 @@ pub struct VoxelPool {
     /// Slots in use (the rest are hidden).
     pub visible: usize,
     /// The model laid out now, if any (none: placeholder boxes).
-    pub shown: Option<AssetId<VoxelModel>>,
-    /// The cloud entity.
-    pub cloud: Option<Entity>,
+    pub shown: Option<AssetId<VoxelModelAsset>>,
 }
 
 /// Where one voxel of a model goes: centre in cloud space, scale and colour.
@@ -105,14 +118,15 @@ pub fn floor_height(model: &voxel_core::VoxelModel) -> f32 {
     model.spec.origin[1] - 1.0
 }
 
-/// The voxel layout of `model` with boxes `box_size` of a cell.
-pub fn targets_for(model: &voxel_core::VoxelModel, box_size: f32) -> Vec<VoxelTarget> {
+/// Where voxel `v` of `model` goes, with boxes `box_size` of a cell.
+pub fn voxel_target(model: &voxel_core::VoxelModel, v: &Voxel, box_size: f32) -> VoxelTarget {
     let scale = Vec3::from(model.spec.cell) * box_size;
-    model
-        .voxels
-        .iter()
-        .map(|v| VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color, part: v.part })
-        .collect()
+    VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color, part: v.part }
+}
+
+/// The voxel layout of `model` (only its visible voxels when `hollow`) with boxes `box_size` of a cell.
+pub fn targets_for(model: &VoxelModelAsset, box_size: f32, hollow: bool) -> Vec<VoxelTarget> {
+    model.shown(hollow).map(|v| voxel_target(model, v, box_size)).collect()
 }
 
 /// Number of placeholder boxes shown before any model is ready.
@@ -154,21 +168,9 @@ pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, assets: &VoxelAs
     }
 }
 
-fn setup(
-    mut commands: Commands,
-    mut meshes: ResMut<Assets<Mesh>>,
-    mut materials: ResMut<Assets<VoxelMaterial>>,
-    settings: Res<VoxelSettings>,
-    mut pool: ResMut<VoxelPool>,
-) {
-    let assets = VoxelAssets {
-        mesh: meshes.add(mesh::rounded_box(settings.roundness, 2)),
-        material: materials.add(voxel_material()),
-    };
-    pool.cloud =
-        Some(commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible)).id());
+fn setup(mut commands: Commands, assets: Res<VoxelAssets>, mut pool: ResMut<VoxelPool>) {
+    commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible));
     grow_pool(&mut commands, &mut pool, &assets, PLACEHOLDER_COUNT);
-    commands.insert_resource(assets);
 }
 
 /// The voxels' query: slot, transform, colour, visibility (the cloud excluded).
@@ -201,35 +203,14 @@ pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], rotation: Qu
 fn grow_for_current(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
-    assets: Option<Res<VoxelAssets>>,
+    assets: Res<VoxelAssets>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
+    models: Res<Assets<VoxelModelAsset>>,
+    settings: Res<VoxelSettings>,
 ) {
-    let Some(assets) = assets else { return };
-    let needed = library
-        .current_entry()
-        .filter(|e| e.status == ModelStatus::Ready)
-        .and_then(|e| e.voxels.as_ref())
-        .and_then(|h| models.get(h))
-        .map_or(0, |m| m.0.voxels.len());
+    let needed = library.current_ready(&models).map_or(0, |(_, m)| m.shown_count(settings.hollow));
     if needed > pool.slots.len() {
         grow_pool(&mut commands, &mut pool, &assets, needed);
-    }
-}
-
-/// Placeholder boxes bob gently while nothing is voxelized yet.
-fn float_placeholder(
-    time: Res<Time>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
-) {
-    if pool.shown.is_some() {
-        return;
-    }
-    let t = time.elapsed_secs();
-    for (slot, mut transform) in &mut voxels {
-        let phase = slot.0 as f32 * 0.7;
-        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
     }
 }
 
@@ -239,6 +220,7 @@ pub(super) fn plugin(app: &mut App) {
         app.init_asset::<VoxelMaterial>();
     }
     app.init_resource::<VoxelPool>();
+    app.init_resource::<VoxelAssets>();
     app.register_type::<VoxelSlot>()
         .register_type::<VoxelCloud>()
         .register_type::<VoxelHome>()
@@ -246,10 +228,7 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(Startup, setup);
     app.add_systems(
         Update,
-        (
-            grow_for_current.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems),
-            float_placeholder.in_set(AppSystems::Animate),
-        ),
+        grow_for_current.in_set(AppSystems::Simulate).in_set(InstancingSystems).after(crate::voxelize::VoxelizeSystems),
     );
 }
 

@@ -5,10 +5,11 @@
 use bevy::prelude::*;
 
 use crate::input::CursorRay;
-use crate::instancing::{VoxelCloud, VoxelHome, VoxelPool, VoxelSlot};
+use crate::instancing::{RepelOffset, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
 use crate::rng::Rng;
-use crate::settings::{Style, VoxelSettings};
-use crate::transition::back_out;
+use crate::schedule::AppSystems;
+use crate::settings::{RepelSettings, Style, VoxelSettings};
+use crate::transition::{ActiveTransition, TransitionSystems, VoxelTween, back_out};
 
 use super::Settled;
 use super::repel::away_from_ray;
@@ -78,45 +79,52 @@ impl Bubble {
     }
 }
 
-/// Gives every voxel a bubble when the style turns to bubbles, and takes them away after.
-pub(super) fn enter_and_leave(
-    mut commands: Commands,
-    settings: Res<VoxelSettings>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<(Entity, &VoxelSlot, Has<Bubble>, &mut Visibility)>,
-) {
-    if !settings.is_changed() && !pool.is_changed() {
-        return;
+/// Gives a bubble to every voxel that has none: all of them on entering the style, then the slots the pool
+/// grows by.
+fn give_bubbles(mut commands: Commands, voxels: Query<(Entity, &VoxelSlot), Without<Bubble>>) {
+    for (entity, slot) in &voxels {
+        let phase = Rng::new(u64::from(slot.0) ^ 0xb0bb1e).f32() * std::f32::consts::TAU;
+        commands.entity(entity).insert(Bubble { phase, state: BubbleState::Whole });
     }
-    let want = settings.style == Style::Bubbles;
-    for (entity, slot, has, mut visibility) in &mut voxels {
-        if want && !has {
-            let phase = Rng::new(u64::from(slot.0) ^ 0xb0bb1e).f32() * std::f32::consts::TAU;
-            commands.entity(entity).insert(Bubble { phase, state: BubbleState::Whole });
-        } else if !want && has {
-            commands.entity(entity).remove::<Bubble>();
-            // A bubble that had burst comes back as a voxel of the model.
-            if (slot.0 as usize) < pool.visible {
-                visibility.set_if_neq(Visibility::Inherited);
-            }
+}
+
+/// Leaving the style: the bubbles go, and every settled voxel of the model is back on its cell (no wobble, no
+/// swell), shown even if it had burst.
+fn take_bubbles(
+    mut commands: Commands,
+    pool: Res<VoxelPool>,
+    active: Res<ActiveTransition>,
+    mut voxels: Query<
+        (Entity, &VoxelSlot, &VoxelHome, &RepelOffset, &mut Transform, &mut Visibility, Has<VoxelTween>),
+        With<Bubble>,
+    >,
+) {
+    let turn = active.turn();
+    for (entity, slot, home, repel, mut transform, mut visibility, flying) in &mut voxels {
+        commands.entity(entity).remove::<Bubble>();
+        // A voxel in flight is placed by its tween.
+        if (slot.0 as usize) < pool.visible && !flying {
+            *transform = voxel_transform(turn, home.position + repel.offset, home.scale);
+            visibility.set_if_neq(Visibility::Inherited);
         }
     }
 }
 
 /// Advances bursts; whole bubbles near the cursor burst.
-pub(super) fn burst(
+fn burst(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
     timing: Res<BubbleSettings>,
     ray: Res<CursorRay>,
-    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
+    repel: Res<RepelSettings>,
+    active: Res<ActiveTransition>,
     mut bubbles: Query<(&VoxelSlot, &VoxelHome, &mut Bubble), Settled>,
     mut frame: Local<u64>,
 ) {
     *frame += 1;
     let dt = time.delta_secs() * settings.speed;
-    let turn = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
-    let radius = settings.repel_radius * 0.6;
+    let turn = active.turn();
+    let radius = repel.radius * 0.6;
     let seed = *frame;
     bubbles.par_iter_mut().for_each(|(slot, home, mut bubble)| {
         let next = match bubble.state {
@@ -139,6 +147,20 @@ pub(super) fn burst(
             bubble.state = next;
         }
     });
+}
+
+pub(super) fn plugin(app: &mut App) {
+    app.init_resource::<BubbleSettings>();
+    app.add_systems(OnEnter(Style::Bubbles), give_bubbles);
+    app.add_systems(OnExit(Style::Bubbles), take_bubbles);
+    app.add_systems(
+        Update,
+        (give_bubbles, burst)
+            .chain()
+            .run_if(in_state(Style::Bubbles))
+            .in_set(AppSystems::Animate)
+            .after(TransitionSystems),
+    );
 }
 
 #[cfg(test)]

@@ -1,14 +1,21 @@
-//! The falling style's ECS side: on entering the style (or on F) the shown voxels let go and become a
-//! [`Pile`] stepped at a fixed rate; F again, another model or another style sends them back to their cells
-//! with the transition tweens.
+//! The falling style's ECS side: on entering the style (or on F) the model's voxels let go, once their morph
+//! has finished, and become a [`Pile`] stepped at the fixed rate. Every solid voxel falls, the interior a hollow
+//! display hides included, so the model lands as a heap with its volume; F again, another model or leaving the style sends
+//! them back to their cells (a [`Reassemble`] message: the transition morphs them from where they lie).
 
 use bevy::prelude::*;
 
-use crate::instancing::{VoxelCloud, VoxelPool, VoxelSlot, floor_height};
-use crate::library::ModelLibrary;
+use crate::input::ToggleFall;
+use bevy::mesh::MeshTag;
+
+use crate::instancing::{
+    RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, floor_height, grow_pool, pack_color,
+    voxel_target, voxel_transform,
+};
+use crate::model::{ModelLibrary, VoxelModelAsset};
+use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
-use crate::transition::{ActiveTransition, VoxelTween};
-use crate::voxelize::VoxelModel;
+use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, TransitionStarted, VoxelTween};
 
 use super::pile::{Pile, PileParams};
 
@@ -16,74 +23,122 @@ use super::pile::{Pile, PileParams};
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Falling(pub u32);
 
-/// The pile in motion and the voxels it moves.
+/// The pile in motion.
 #[derive(Resource, Debug)]
 pub struct FallingPile {
     /// The simulation.
     pub pile: Pile,
-    /// The voxel entity of each sphere.
-    pub entities: Vec<Entity>,
     /// The model the voxels belong to.
-    pub model: AssetId<VoxelModel>,
+    pub model: AssetId<VoxelModelAsset>,
 }
 
 /// Whether the voxels should be falling (the style is on and F has not called them back).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct FallRequested(pub bool);
 
+/// The model whose morph has finished, while no other has started: the voxels rest on its cells.
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct RestingOn(pub Option<AssetId<VoxelModelAsset>>);
+
 /// The seed of the next pile (each drop jitters differently, reproducibly).
 #[derive(Resource, Debug, Default, Clone, Copy)]
 pub struct PileSeed(pub u64);
 
-/// Reacts to the style, F and model changes: lets the voxels go or calls them back.
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
-pub(super) fn control(
+/// Follows the transition's messages: the voxels rest once a morph has finished, not while one runs.
+fn track_rest(
+    mut started: MessageReader<TransitionStarted>,
+    mut finished: MessageReader<TransitionFinished>,
+    mut resting: ResMut<RestingOn>,
+) {
+    // Within a frame a morph starts before any finishes, so a finish read here is the latest news.
+    let began = started.read().count() > 0;
+    if let Some(done) = finished.read().last() {
+        resting.0 = Some(done.model);
+    } else if began {
+        resting.0 = None;
+    }
+}
+
+/// Entering the style: the voxels are to fall (once they rest).
+fn request_fall(mut requested: ResMut<FallRequested>) {
+    requested.0 = true;
+}
+
+/// Ends the pile: the voxels stay where they lie until the transition moves them.
+fn release(commands: &mut Commands, falling: &Query<Entity, With<Falling>>) {
+    for entity in falling {
+        commands.entity(entity).remove::<Falling>();
+    }
+    commands.remove_resource::<FallingPile>();
+}
+
+/// Leaving the style: the voxels go back to their cells.
+fn reassemble_on_exit(
     mut commands: Commands,
-    keys: Res<ButtonInput<KeyCode>>,
+    mut requested: ResMut<FallRequested>,
+    pile: Option<Res<FallingPile>>,
+    falling: Query<Entity, With<Falling>>,
+    mut reassemble: MessageWriter<Reassemble>,
+) {
+    requested.0 = false;
+    if pile.is_some() {
+        release(&mut commands, &falling);
+        reassemble.write(Reassemble);
+    }
+}
+
+/// Reacts to F and model changes: lets the resting voxels go or calls them back.
+fn control(
+    mut commands: Commands,
+    mut toggles: MessageReader<ToggleFall>,
     settings: Res<VoxelSettings>,
     library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModel>>,
-    pool: Res<VoxelPool>,
+    models: Res<Assets<VoxelModelAsset>>,
+    mut pool: ResMut<VoxelPool>,
+    assets: Res<VoxelAssets>,
+    active: Res<ActiveTransition>,
+    resting: Res<RestingOn>,
     mut requested: ResMut<FallRequested>,
-    mut active: ResMut<ActiveTransition>,
     mut seed: ResMut<PileSeed>,
     pile: Option<Res<FallingPile>>,
     voxels: Query<(Entity, &VoxelSlot, &GlobalTransform, &Visibility), (Without<VoxelTween>, Without<VoxelCloud>)>,
     falling: Query<Entity, With<Falling>>,
-    mut last_style: Local<Style>,
+    mut reassemble: MessageWriter<Reassemble>,
 ) {
-    let is_falling = settings.style == Style::Falling;
-    if is_falling && *last_style != Style::Falling {
-        requested.0 = true;
-    }
-    if !is_falling {
-        requested.0 = false;
-    }
-    *last_style = settings.style;
-    if is_falling && keys.just_pressed(KeyCode::KeyF) {
+    if toggles.read().count() % 2 == 1 {
         requested.0 = pile.is_none();
     }
-    let wanted = library.current_entry().and_then(|e| e.voxels.as_ref()).map(Handle::id);
+    let wanted = library.current_ready(&models).map(|(id, _)| id);
     if let Some(pile) = &pile {
-        let model_changed = wanted != Some(pile.model);
+        // Another model (once it is ready): its morph starts from wherever the voxels lie.
+        let model_changed = wanted.is_some_and(|w| w != pile.model);
         if !requested.0 || model_changed {
-            // Back to the cells: the transition morphs from wherever the voxels lie.
-            for entity in &falling {
-                commands.entity(entity).remove::<Falling>();
-            }
-            commands.remove_resource::<FallingPile>();
-            active.restart = !model_changed;
+            release(&mut commands, &falling);
             if model_changed {
                 requested.0 = false;
+            } else {
+                reassemble.write(Reassemble);
             }
         }
         return;
     }
-    // Let go once the shown model has settled.
-    let (Some(id), true) = (pool.shown, requested.0 && active.running.is_none() && wanted == pool.shown) else {
+    // Let go once the shown model rests on its cells.
+    let Some(id) = pool.shown.filter(|id| requested.0 && wanted == Some(*id) && resting.0 == Some(*id)) else {
         return;
     };
     let Some(model) = models.get(id) else { return };
+    // The voxels a hollow display hides fall too, from their cells, on spare slots of the pool.
+    let interior: Vec<_> = if settings.hollow {
+        model.voxels.iter().filter(|v| !v.visible).map(|v| voxel_target(model, v, settings.box_size)).collect()
+    } else {
+        Vec::new()
+    };
+    let needed = pool.visible + interior.len();
+    if pool.slots.len() < needed {
+        // The new slots exist from the next frame on.
+        grow_pool(&mut commands, &mut pool, &assets, needed);
+        return;
+    }
     // In slot order: query order depends on how tables were rearranged, and the pile must not.
     let mut shown: Vec<(u32, Entity, Vec3)> = voxels
         .iter()
@@ -91,42 +146,64 @@ pub(super) fn control(
         .map(|(e, s, g, _)| (s.0, e, g.translation()))
         .collect();
     shown.sort_unstable_by_key(|s| s.0);
-    let shown: Vec<(Entity, Vec3)> = shown.into_iter().map(|(_, e, p)| (e, p)).collect();
     if shown.is_empty() {
         return;
     }
-    let cell = model.0.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size;
-    let params = PileParams::for_cell(cell, floor_height(&model.0));
-    let pile = Pile::new(shown.iter().map(|s| s.1).collect(), params, seed.0);
+    let turn = active.turn();
+    let cell = model.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size;
+    let params = PileParams::for_cell(cell, floor_height(model));
+    let starts = shown.iter().map(|s| s.2).chain(interior.iter().map(|t| turn * t.position)).collect();
+    let pile = Pile::new(starts, params, seed.0);
     seed.0 += 1;
-    for (i, (entity, _)) in shown.iter().enumerate() {
+    for (i, (_, entity, _)) in shown.iter().enumerate() {
         commands.entity(*entity).insert(Falling(i as u32));
     }
-    commands.insert_resource(FallingPile { pile, entities: shown.into_iter().map(|s| s.0).collect(), model: id });
+    for (k, t) in interior.iter().enumerate() {
+        commands.entity(pool.slots[pool.visible + k]).insert((
+            voxel_transform(turn, t.position, t.scale),
+            MeshTag(pack_color(t.color)),
+            Visibility::Inherited,
+            VoxelHome { position: t.position, scale: t.scale, part: t.part },
+            RepelOffset::default(),
+            Falling((shown.len() + k) as u32),
+        ));
+    }
+    commands.insert_resource(FallingPile { pile, model: id });
 }
 
 /// One fixed step of the pile.
-pub(super) fn step(pile: Option<ResMut<FallingPile>>) {
-    if let Some(mut pile) = pile {
-        pile.pile.step();
-    }
+fn step(mut pile: ResMut<FallingPile>) {
+    pile.pile.step();
 }
 
-/// Writes the pile's positions into the falling voxels.
-pub(super) fn sync(
-    pile: Option<Res<FallingPile>>,
-    mut voxels: Query<(&Falling, &mut Transform, &mut GlobalTransform)>,
-) {
-    let Some(pile) = pile else { return };
+/// Writes the pile's positions into the falling voxels (their global transform too: voxels have no parent).
+fn sync(pile: Res<FallingPile>, mut voxels: Query<(&Falling, &mut Transform, &mut GlobalTransform)>) {
     if !pile.is_changed() {
         return;
     }
     voxels.par_iter_mut().for_each(|(falling, mut transform, mut global)| {
         if let Some(p) = pile.pile.positions.get(falling.0 as usize) {
-            transform.bypass_change_detection().translation = *p;
-            let mut affine = global.affine();
-            affine.translation = (*p).into();
-            *global = GlobalTransform::from(affine);
+            let transform = transform.bypass_change_detection();
+            transform.translation = *p;
+            *global = GlobalTransform::from(*transform);
         }
     });
+}
+
+pub(super) fn plugin(app: &mut App) {
+    app.init_resource::<FallRequested>();
+    app.init_resource::<RestingOn>();
+    app.init_resource::<PileSeed>();
+    app.add_systems(OnEnter(Style::Falling), request_fall);
+    app.add_systems(OnExit(Style::Falling), reassemble_on_exit);
+    app.add_systems(
+        Update,
+        (track_rest, control.run_if(in_state(Style::Falling)))
+            .chain()
+            .in_set(AppSystems::Simulate)
+            .after(crate::voxelize::VoxelizeSystems)
+            .after(crate::instancing::InstancingSystems),
+    );
+    app.add_systems(FixedUpdate, step.run_if(resource_exists::<FallingPile>).in_set(AppSystems::Simulate));
+    app.add_systems(Update, sync.run_if(resource_exists::<FallingPile>).in_set(AppSystems::Sync));
 }

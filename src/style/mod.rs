@@ -1,7 +1,9 @@
 //! Styles: rounded boxes, Lego bricks, bubbles and falling voxels (S cycles, the panel picks), and mouse
-//! repel in every style. Each style swaps the shared voxel mesh and material (the single batch stays); Lego
-//! re-voxelizes with cells 1.2× taller. Settled voxels (not tweening, not falling) are placed (`place`) from
-//! their home cell, their bubble wobble and their repel spring.
+//! repel in every style. The style is a Bevy state ([`Style`]): entering one swaps the shared voxel mesh and
+//! the material's look (the single batch stays) and sets up what the style needs (bubbles, a falling pile);
+//! leaving tears it down. Lego re-voxelizes with cells 1.2× taller (the voxelizer options follow the state).
+//! Settled voxels (not tweening, not falling) are placed (`place`) from their home cell, their bubble wobble
+//! and their repel spring.
 
 pub mod bubbles;
 pub mod falling;
@@ -12,11 +14,10 @@ pub mod repel;
 
 use bevy::prelude::*;
 
-use crate::AppSystems;
 use crate::instancing::{VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
+use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
-use bubbles::BubbleSettings;
 use falling::Falling;
 use repel::RepelActive;
 
@@ -41,46 +42,34 @@ fn style_surface(style: Style) -> (f32, f32) {
     }
 }
 
-/// Swaps the shared mesh and the material's look when the style (or roundness) changes.
-fn apply_look(
+/// Dresses the pool in the style's mesh and look (on entering a style, and when the roundness changes).
+fn wear_style(
+    style: Res<State<Style>>,
     settings: Res<VoxelSettings>,
-    assets: Option<Res<VoxelAssets>>,
+    assets: Res<VoxelAssets>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<VoxelMaterial>>,
-    mut last: Local<Option<(Style, f32)>>,
 ) {
-    let Some(assets) = assets else { return };
-    let now = (settings.style, settings.roundness);
-    if *last == Some(now) {
-        return;
-    }
-    // The pool starts with rounded boxes; any other first style (`--style`) swaps at once.
-    if last.is_some() || settings.style != Style::RoundedBoxes {
-        let _ = meshes.insert(&assets.mesh, style_mesh(settings.style, settings.roundness));
-    }
+    let style = *style.get();
+    let _ = meshes.insert(&assets.mesh, style_mesh(style, settings.roundness));
     if let Some(mut material) = materials.get_mut(&assets.material) {
-        let (roughness, reflectance) = style_surface(settings.style);
-        material.base.perceptual_roughness = roughness;
-        material.base.reflectance = reflectance;
+        (material.base.perceptual_roughness, material.base.reflectance) = style_surface(style);
     }
-    *last = Some(now);
+}
+
+/// Whether the roundness setting changed since the last frame.
+fn roundness_changed(settings: Res<VoxelSettings>, mut last: Local<Option<f32>>) -> bool {
+    let changed = last.is_some_and(|r| r != settings.roundness);
+    *last = Some(settings.roundness);
+    changed
 }
 
 pub(super) fn plugin(app: &mut App) {
-    app.init_resource::<BubbleSettings>();
     app.init_resource::<RepelActive>();
-    app.init_resource::<falling::FallRequested>();
-    app.init_resource::<falling::PileSeed>();
-    app.register_type::<BubbleSettings>();
-    app.insert_resource(Time::<Fixed>::from_hz(60.0));
-    app.add_systems(Update, falling::control.in_set(AppSystems::Simulate).after(crate::voxelize::VoxelizeSystems));
-    app.add_systems(FixedUpdate, falling::step);
-    app.add_systems(
-        Update,
-        (bubbles::enter_and_leave, bubbles::burst)
-            .chain()
-            .in_set(AppSystems::Animate)
-            .after(crate::transition::TransitionSystems),
-    );
-    app.add_systems(Update, (place::place_settled, falling::sync, apply_look).in_set(AppSystems::Sync));
+    for style in Style::ALL {
+        app.add_systems(OnEnter(style), wear_style);
+    }
+    app.add_systems(Update, wear_style.run_if(roundness_changed).in_set(AppSystems::Sync));
+    app.add_systems(Update, place::place_settled.in_set(AppSystems::Sync));
+    app.add_plugins((bubbles::plugin, falling::plugin));
 }

@@ -11,8 +11,9 @@ use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 
 use crate::input::CursorRay;
-use crate::instancing::{RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, voxel_global};
-use crate::settings::{Style, VoxelSettings};
+use crate::instancing::{RepelOffset, VoxelHome, VoxelPool, VoxelSlot, voxel_global};
+use crate::settings::{RepelSettings, Style, VoxelSettings};
+use crate::transition::ActiveTransition;
 
 use super::Settled;
 use super::bubbles::{Bubble, BubbleSettings};
@@ -181,13 +182,14 @@ impl Placement {
 
 /// Places settled voxels: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
 /// visibility. The repel springs are stepped in the same pass, and nothing runs while nothing moves.
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub(super) fn place_settled(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
+    repel: Res<RepelSettings>,
+    style: Res<State<Style>>,
     timing: Res<BubbleSettings>,
     cursor: Res<CursorRay>,
-    cloud: Query<&Transform, (With<VoxelCloud>, Without<VoxelHome>)>,
+    active: Res<ActiveTransition>,
     pool: Res<VoxelPool>,
     mut voxels: Query<
         (
@@ -202,23 +204,19 @@ pub(super) fn place_settled(
         Settled,
     >,
     mut springs: ResMut<RepelActive>,
-    mut had_bubbles: Local<bool>,
     ticks: SystemChangeTick,
 ) {
-    let bubbles = settings.style == Style::Bubbles;
-    let ray = cursor.0.filter(|_| settings.repel);
-    if !bubbles && !*had_bubbles && ray.is_none() && !springs.0 {
+    let ray = cursor.0.filter(|_| repel.enabled);
+    if *style.get() != Style::Bubbles && ray.is_none() && !springs.0 {
         return;
     }
-    // One more pass after bubbles end puts the voxels back on their cells.
-    *had_bubbles = bubbles;
-    let rotation = cloud.single().map_or(Quat::IDENTITY, |t| t.rotation);
+    let rotation = active.turn();
     let placement = Placement {
         rotation,
         // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
         ray: ray.map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction }),
-        radius: settings.repel_radius,
-        strength: settings.repel_strength,
+        radius: repel.radius,
+        strength: repel.strength,
         dt: time.delta_secs().min(1.0 / 20.0),
         time: time.elapsed_secs() * settings.speed,
         in_model: pool.visible,

@@ -1,5 +1,5 @@
 //! Voxelization in the app: loaded glTF assets → triangle soup → the core voxelizer on the
-//! `AsyncComputeTaskPool` → [`VoxelModel`] assets. A settings change re-voxelizes every model; results of
+//! `AsyncComputeTaskPool` → [`VoxelModelAsset`]s. A settings change re-voxelizes every model; results of
 //! stale settings are dropped (latest wins).
 
 pub mod from_gltf;
@@ -11,18 +11,14 @@ use bevy::gltf::{Gltf, GltfMaterial, GltfMesh, GltfNode};
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 
-use crate::AppSystems;
-use crate::library::{LibrarySystems, ModelLibrary, ModelStatus};
-use crate::settings::VoxelSettings;
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::schedule::AppSystems;
+use crate::settings::{Style, VoxelSettings};
 use from_gltf::{GltfAssets, soup_from_gltf};
 
-/// The voxelization systems (in `AppSystems::Simulate`, after the library's).
+/// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct VoxelizeSystems;
-
-/// A voxelized model: the core's output as a Bevy asset.
-#[derive(Asset, TypePath, Debug, Clone)]
-pub struct VoxelModel(pub voxel_core::VoxelModel);
 
 /// Bumped whenever a setting that shapes voxelization changes; models voxelized with an older
 /// generation are redone.
@@ -43,10 +39,11 @@ pub struct VoxelizeJob {
 /// Starts a new generation when voxelization settings change.
 fn track_settings(
     settings: Res<VoxelSettings>,
+    style: Res<State<Style>>,
     mut generation: ResMut<VoxelizeGeneration>,
     mut last: Local<Option<voxel_core::VoxelizeOptions>>,
 ) {
-    let options = settings.voxelize_options();
+    let options = settings.voxelize_options(*style.get());
     if last.is_some_and(|l| l != options) {
         generation.0 += 1;
     }
@@ -54,7 +51,6 @@ fn track_settings(
 }
 
 /// Reads newly loaded models into triangle soups.
-#[allow(clippy::too_many_arguments)]
 fn read_loaded(
     mut library: ResMut<ModelLibrary>,
     asset_server: Res<AssetServer>,
@@ -91,10 +87,11 @@ fn start_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     settings: Res<VoxelSettings>,
+    style: Res<State<Style>>,
     generation: Res<VoxelizeGeneration>,
     jobs: Query<(Entity, &VoxelizeJob)>,
 ) {
-    let options = settings.voxelize_options();
+    let options = settings.voxelize_options(*style.get());
     let pool = AsyncComputeTaskPool::get();
     for (i, entry) in library.entries.iter_mut().enumerate() {
         let Some(soup) = entry.soup.clone() else { continue };
@@ -123,7 +120,7 @@ fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
-    mut models: ResMut<Assets<VoxelModel>>,
+    mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
@@ -135,7 +132,7 @@ fn finish_jobs(
         match result {
             Ok(model) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModel(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;
@@ -147,14 +144,13 @@ fn finish_jobs(
 }
 
 pub(super) fn plugin(app: &mut App) {
-    app.init_asset::<VoxelModel>();
+    app.init_asset::<VoxelModelAsset>();
     app.init_resource::<VoxelizeGeneration>();
     app.add_systems(
         Update,
         (track_settings, read_loaded, start_jobs, finish_jobs)
             .chain()
             .in_set(AppSystems::Simulate)
-            .in_set(VoxelizeSystems)
-            .after(LibrarySystems),
+            .in_set(VoxelizeSystems),
     );
 }

@@ -9,10 +9,10 @@ fn voxelize(args: &[&str]) -> std::process::Output {
 }
 
 fn write_cube_glb(dir: &std::path::Path) -> std::path::PathBuf {
-    let cube = voxel_art::voxel::shapes::cuboid([0.0; 3], [1.0; 3]);
-    let soup = voxel_art::voxel::TriangleSoup::from_mesh(&cube, [1.0; 4]);
+    let cube = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
+    let soup = voxel_core::TriangleSoup::from_mesh(&cube, [1.0; 4]);
     let path = dir.join("cube.glb");
-    std::fs::write(&path, voxel_art::voxel::glb::soup_to_glb(&soup)).unwrap();
+    std::fs::write(&path, voxel_core::glb::soup_to_glb(&soup)).unwrap();
     path
 }
 

@@ -4,12 +4,12 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
-use voxel_art::library::{ModelLibrary, ModelStatus};
+use voxel_art::config::AppArgs;
+use voxel_art::model::{ModelLibrary, ModelStatus};
 
 /// The app under test: the headless app (logic plugins, glTF loading, manual time step).
 pub fn test_app(args: AppArgs) -> App {
-    voxel_art::headless::headless_app(args)
+    voxel_art::headless::headless_app(&args)
 }
 
 /// Steps the app until `done` holds (panics after `limit` of wall time, printing the library).
@@ -50,7 +50,7 @@ pub fn tap(app: &mut App, key: KeyCode) {
 
 /// The shipped models folder.
 pub fn shipped(name: &str) -> std::path::PathBuf {
-    voxel_art::args::asset_root().join("models").join(name)
+    voxel_art::assets::asset_root().join("models").join(name)
 }
 
 /// Writes bytes to a fresh temp file and returns its path.
@@ -62,8 +62,14 @@ pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     path
 }
 
+/// The voxelizer options the app uses now (its settings in its current style).
+pub fn app_options(app: &App) -> voxel_core::VoxelizeOptions {
+    let style = *app.world().resource::<State<voxel_art::settings::Style>>().get();
+    app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style)
+}
+
 /// Voxelizes a file with the core directly (the CLI's front door) for comparison.
-pub fn core_voxelize(path: &Path, options: &voxel_art::voxel::VoxelizeOptions) -> voxel_art::voxel::VoxelModel {
-    let soup = voxel_art::voxel::load_file(path).unwrap();
-    voxel_art::voxel::voxelize(&soup, options).unwrap()
+pub fn core_voxelize(path: &Path, options: &voxel_core::VoxelizeOptions) -> voxel_core::VoxelModel {
+    let soup = voxel_core::load_file(path).unwrap();
+    voxel_core::voxelize(&soup, options).unwrap()
 }

@@ -3,20 +3,22 @@
 use std::time::Duration;
 
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
+use voxel_art::config::AppArgs;
 use voxel_art::instancing::VoxelPool;
-use voxel_art::library::{LibraryRequest, ModelLibrary, ModelStatus};
+use voxel_art::library::LibraryRequest;
+use voxel_art::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::settings::VoxelSettings;
-use voxel_art::voxelize::{VoxelModel, VoxelizeGeneration, VoxelizeJob};
+use voxel_art::voxelize::{VoxelizeGeneration, VoxelizeJob};
 
-use crate::harness::{all_settled, core_voxelize, run_until, shipped, tap, temp_file, test_app};
+use crate::harness::{all_settled, app_options, core_voxelize, run_until, shipped, tap, temp_file, test_app};
 
 const LIMIT: Duration = Duration::from_secs(60);
 
-pub fn shown_model(app: &App) -> Option<voxel_art::voxel::VoxelModel> {
+/// The current model's latest voxelization.
+pub fn shown_model(app: &App) -> Option<VoxelModelAsset> {
     let library = app.world().resource::<ModelLibrary>();
     let handle = library.current_entry()?.voxels.clone()?;
-    app.world().resource::<Assets<VoxelModel>>().get(&handle).map(|m| m.0.clone())
+    app.world().resource::<Assets<VoxelModelAsset>>().get(&handle).cloned()
 }
 
 #[test]
@@ -26,15 +28,15 @@ fn a_shipped_model_voxelizes_like_the_core_does() {
     let library = app.world().resource::<ModelLibrary>();
     assert!(library.entries.len() >= 6, "{} shipped models", library.entries.len());
     assert!(library.entries.iter().all(|e| e.status == ModelStatus::Ready), "{:?}", library.entries);
-    let options = app.world().resource::<VoxelSettings>().voxelize_options();
+    let options = app_options(&app);
     for i in 0..library.entries.len() {
         let library = app.world().resource::<ModelLibrary>();
         let entry = &library.entries[i];
-        let app_model = app.world().resource::<Assets<VoxelModel>>().get(entry.voxels.as_ref().unwrap()).unwrap();
+        let app_model = app.world().resource::<Assets<VoxelModelAsset>>().get(entry.voxels.as_ref().unwrap()).unwrap();
         let core_model = core_voxelize(&shipped(&format!("{}.glb", entry.name)), &options);
         // The Bevy front door (loaded Gltf assets) and the gltf-crate one give the same voxels.
-        assert_eq!(app_model.0.stats, core_model.stats, "{}", entry.name);
-        assert_eq!(app_model.0.voxels.len(), core_model.voxels.len(), "{}", entry.name);
+        assert_eq!(app_model.stats, core_model.stats, "{}", entry.name);
+        assert_eq!(app_model.voxels.len(), core_model.voxels.len(), "{}", entry.name);
     }
 }
 
@@ -45,8 +47,9 @@ fn the_pool_shows_the_current_model_and_hides_spares() {
     // Find the largest and the smallest model.
     let counts: Vec<usize> = {
         let library = app.world().resource::<ModelLibrary>();
-        let models = app.world().resource::<Assets<VoxelModel>>();
-        library.entries.iter().map(|e| models.get(e.voxels.as_ref().unwrap()).unwrap().0.voxels.len()).collect()
+        let models = app.world().resource::<Assets<VoxelModelAsset>>();
+        let hollow = app.world().resource::<VoxelSettings>().hollow;
+        library.entries.iter().map(|e| models.get(e.voxels.as_ref().unwrap()).unwrap().shown_count(hollow)).collect()
     };
     let largest = (0..counts.len()).max_by_key(|&i| counts[i]).unwrap();
     let smallest = (0..counts.len()).min_by_key(|&i| counts[i]).unwrap();
@@ -80,9 +83,9 @@ fn keys_move_the_current_model() {
     assert_eq!(current(&app), 3);
     tap(&mut app, KeyCode::Digit9);
     assert_eq!(current(&app), 3, "no ninth model: the pick stays");
-    let open = app.world().resource::<VoxelSettings>().panel_open;
+    let open = app.world().resource::<voxel_art::settings::PanelOpen>().0;
     tap(&mut app, KeyCode::KeyH);
-    assert_eq!(app.world().resource::<VoxelSettings>().panel_open, !open);
+    assert_eq!(app.world().resource::<voxel_art::settings::PanelOpen>().0, !open);
 }
 
 #[test]
@@ -150,14 +153,15 @@ fn a_parameter_change_revoxelizes_and_stale_results_are_dropped() {
     // No job of an older generation survives.
     let mut jobs = app.world_mut().query::<&VoxelizeJob>();
     assert!(jobs.iter(app.world()).all(|j| j.generation == latest));
-    let options = app.world().resource::<VoxelSettings>().voxelize_options();
+    let options = app_options(&app);
     let current = shown_model(&app).unwrap();
     let name = app.world().resource::<ModelLibrary>().current_entry().unwrap().name.clone();
     assert_eq!(current.stats, core_voxelize(&shipped(&format!("{name}.glb")), &options).stats);
     assert!((current.spec.cell[0] - 0.2).abs() < 1e-6);
     // The pool morphs to the new voxelization.
     crate::transition::settle(&mut app);
-    assert_eq!(app.world().resource::<VoxelPool>().visible, current.voxels.len());
+    let hollow = app.world().resource::<VoxelSettings>().hollow;
+    assert_eq!(app.world().resource::<VoxelPool>().visible, current.shown_count(hollow));
     crate::transition::assert_shows_model(&mut app);
 }
 
@@ -217,4 +221,77 @@ fn per_voxel_systems_get_every_core_and_small_machines_run_schedules_on_one_thre
     } else {
         assert_eq!(switched, 0);
     }
+}
+
+#[test]
+fn no_two_systems_that_share_data_run_in_an_undefined_order() {
+    use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, Schedules};
+    use voxel_art::settings::Style;
+    let mut app = test_app(AppArgs { no_shipped: true, ..Default::default() });
+    let strict = ScheduleBuildSettings { ambiguity_detection: LogLevel::Error, ..Default::default() };
+    // The app's schedules (Bevy's own, such as StateTransition, order their systems by other means).
+    let mut checked = Vec::new();
+    for (label, schedule) in app.world_mut().resource_mut::<Schedules>().iter_mut() {
+        let name = format!("{label:?}");
+        if ["Update", "FixedUpdate", "Startup"].contains(&name.as_str()) || name.starts_with("On") {
+            schedule.set_build_settings(strict.clone());
+            checked.push(name);
+        }
+    }
+    assert!(checked.len() >= 3 + 2 * 2, "schedules checked: {checked:?}");
+    // Running builds each schedule (an ambiguity panics with the systems and what they share); every style is
+    // entered and left once, so their OnEnter/OnExit schedules run too.
+    for style in Style::ALL.into_iter().chain([Style::RoundedBoxes]) {
+        app.world_mut().resource_mut::<NextState<Style>>().set(style);
+        app.update();
+        app.update();
+    }
+}
+
+#[test]
+fn the_pointer_acts_on_the_stage_only_once_it_has_moved_there() {
+    use voxel_art::input::{PointerMode, StagePointer};
+    let (centre, beside) = (Some(Vec2::new(640.0, 360.0)), Some(Vec2::new(700.0, 360.0)));
+    let mut pointer = StagePointer::default();
+    for _ in 0..30 {
+        pointer.observe(PointerMode::AfterMove, centre, false);
+        assert!(!pointer.active, "a pointer sitting where the window opened acts");
+    }
+    pointer.observe(PointerMode::AfterMove, beside, true);
+    assert!(!pointer.active, "a move over the panel does not count");
+    pointer.observe(PointerMode::AfterMove, None, false);
+    assert!(!pointer.active);
+    pointer.observe(PointerMode::AfterMove, beside, false);
+    assert!(pointer.active, "a move over the stage counts");
+    pointer.observe(PointerMode::AfterMove, centre, false);
+    assert!(pointer.active, "and keeps counting");
+    let mut never = StagePointer::default();
+    let mut always = StagePointer::default();
+    for cursor in [centre, beside, centre] {
+        never.observe(PointerMode::Never, cursor, false);
+        always.observe(PointerMode::Always, cursor, false);
+        assert!(!never.active && always.active);
+    }
+
+    // In the app: the window's pointer starts at its centre and only counts once moved.
+    let mut app = test_app(AppArgs { no_shipped: true, ..Default::default() });
+    let mut window = Window::default();
+    window.set_cursor_position(centre);
+    let window = app.world_mut().spawn((window, bevy::window::PrimaryWindow)).id();
+    for _ in 0..10 {
+        app.update();
+    }
+    assert!(!app.world().resource::<StagePointer>().active);
+    app.world_mut().get_mut::<Window>(window).unwrap().set_cursor_position(beside);
+    app.update();
+    assert!(app.world().resource::<StagePointer>().active);
+
+    // Screenshots ignore the pointer unless asked for it.
+    let shot = |repel| {
+        let app = test_app(AppArgs { no_shipped: true, screenshot: Some("x.png".into()), repel, ..Default::default() });
+        *app.world().resource::<PointerMode>()
+    };
+    assert_eq!(shot(false), PointerMode::Never);
+    assert_eq!(shot(true), PointerMode::Always);
+    assert_eq!(*app.world().resource::<PointerMode>(), PointerMode::AfterMove);
 }

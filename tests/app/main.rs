@@ -4,6 +4,7 @@ mod cli;
 mod common;
 mod harness;
 mod logic;
+mod modules;
 mod render;
 mod styles;
 mod transition;

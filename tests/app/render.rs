@@ -6,7 +6,7 @@ use std::process::Command;
 use crate::common::scratch_dir;
 
 fn hsl(rgb: [u8; 3]) -> [f32; 3] {
-    voxel_art::voxel::color::rgb_to_hsl(rgb.map(|c| f32::from(c) / 255.0))
+    voxel_core::color::rgb_to_hsl(rgb.map(|c| f32::from(c) / 255.0))
 }
 
 fn luminance(p: [u8; 3]) -> f32 {

@@ -3,11 +3,11 @@
 use std::time::Duration;
 
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
+use voxel_art::config::AppArgs;
 use voxel_art::input::CursorRay;
 use voxel_art::instancing::{VoxelCloud, VoxelHome, VoxelSlot};
 use voxel_art::library::LibraryRequest;
-use voxel_art::settings::{Style, VoxelSettings};
+use voxel_art::settings::{RepelSettings, Style, VoxelSettings};
 use voxel_art::style::bubbles::{Bubble, BubbleSettings, BubbleState};
 use voxel_art::style::falling::FallingPile;
 
@@ -26,8 +26,9 @@ fn cherry_app() -> App {
     app
 }
 
+/// Asks for `style` (it is entered at the next update's state transition).
 fn set_style(app: &mut App, style: Style) {
-    app.world_mut().resource_mut::<VoxelSettings>().style = style;
+    app.world_mut().resource_mut::<NextState<Style>>().set(style);
 }
 
 /// World position of a slot's home cell.
@@ -66,6 +67,12 @@ fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
         model.spec.cell[0] * app.world().resource::<VoxelSettings>().box_size
     };
     assert!(pile.max_overlap(size) < 0.05, "voxels overlap by {} of a cell", pile.max_overlap(size));
+    // Every solid voxel fell, the interior a hollow display hides included: a heap, not a one-voxel splash.
+    let stats = shown_model(&app).unwrap().stats;
+    assert_eq!(pile.positions.len(), stats.voxels, "the pile has the model's volume");
+    assert!(stats.voxels > stats.visible, "the cherry has an interior");
+    let top = pile.positions.iter().map(|p| p.y).fold(floor, f32::max) - floor;
+    assert!(top > 2.0 * size, "the heap is {top} high, {} cells", top / size);
     // The pile lies under the model.
     let model = shown_model(&app).unwrap();
     let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
@@ -110,8 +117,8 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     let mut app = cherry_app();
     app.init_resource::<Replaced>().add_systems(Last, count_replaced);
     let (radius, strength) = {
-        let s = app.world().resource::<VoxelSettings>();
-        (s.repel_radius, s.repel_strength)
+        let s = app.world().resource::<RepelSettings>();
+        (s.radius, s.strength)
     };
     let target = home_world(&mut app, 0);
     let far_slot = {
@@ -159,7 +166,7 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
 #[test]
 fn a_burst_bubble_vanishes_and_reforms_at_its_cell() {
     let mut app = cherry_app();
-    app.world_mut().resource_mut::<VoxelSettings>().repel = false;
+    app.world_mut().resource_mut::<RepelSettings>().enabled = false;
     set_style(&mut app, Style::Bubbles);
     for _ in 0..3 {
         app.update();
@@ -229,7 +236,7 @@ fn the_pool_wears_the_style_mesh_from_the_start_and_after_a_switch() {
     for _ in 0..3 {
         app.update();
     }
-    assert_eq!(app.world().resource::<VoxelSettings>().style, Style::Lego);
+    assert_eq!(*app.world().resource::<State<Style>>().get(), Style::Lego);
     assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::Lego)), "started with --style lego: bricks");
     set_style(&mut app, Style::Bubbles);
     app.update();
@@ -237,4 +244,63 @@ fn the_pool_wears_the_style_mesh_from_the_start_and_after_a_switch() {
     set_style(&mut app, Style::RoundedBoxes);
     app.update();
     assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::RoundedBoxes)));
+}
+
+/// (voxels carrying component `C`, all voxels).
+fn count_with<C: Component>(app: &mut App) -> (usize, usize) {
+    let mut q = app.world_mut().query::<(&VoxelSlot, Has<C>)>();
+    let all: Vec<bool> = q.iter(app.world()).map(|(_, has)| has).collect();
+    (all.iter().filter(|h| **h).count(), all.len())
+}
+
+#[test]
+fn bubbles_come_on_entering_the_style_and_leave_every_voxel_on_its_cell() {
+    let mut app = cherry_app();
+    app.world_mut().resource_mut::<RepelSettings>().enabled = false;
+    set_style(&mut app, Style::Bubbles);
+    app.update();
+    let (bubbles, voxels) = count_with::<Bubble>(&mut app);
+    assert!(voxels > 500 && bubbles == voxels, "{bubbles} bubbles on {voxels} voxels");
+    // Burst the bubbles under the cursor and let the rest wobble off their cells.
+    let at = home_world(&mut app, 0);
+    app.insert_resource(CursorRay(Some(Ray3d::new(at + Vec3::Z * 20.0, Dir3::NEG_Z))));
+    for _ in 0..12 {
+        app.update();
+    }
+    app.insert_resource(CursorRay(None));
+    let hidden = {
+        let pool = app.world().resource::<voxel_art::instancing::VoxelPool>().visible;
+        let mut q = app.world_mut().query::<(&VoxelSlot, &Visibility)>();
+        q.iter(app.world()).filter(|(s, v)| (s.0 as usize) < pool && **v == Visibility::Hidden).count()
+    };
+    assert!(hidden > 0, "no bubble burst");
+    assert!(translation(&mut app, 1).distance(home_world(&mut app, 1)) > 1e-3, "bubbles do not wobble");
+    set_style(&mut app, Style::RoundedBoxes);
+    app.update();
+    assert_eq!(count_with::<Bubble>(&mut app).0, 0, "bubbles left behind");
+    // Every voxel is back on its cell, shown, at its size.
+    assert_shows_model(&mut app);
+}
+
+#[test]
+fn falling_lets_go_on_entering_the_style_and_reassembles_on_leaving() {
+    let mut app = cherry_app();
+    set_style(&mut app, Style::Falling);
+    for _ in 0..3 {
+        app.update();
+    }
+    let solid = shown_model(&app).unwrap().stats.voxels;
+    assert_eq!(count_with::<voxel_art::style::falling::Falling>(&mut app).0, solid, "every solid voxel falls");
+    for _ in 0..60 {
+        app.update();
+    }
+    set_style(&mut app, Style::Lego);
+    app.update();
+    assert!(app.world().get_resource::<FallingPile>().is_none(), "the pile outlived the style");
+    assert_eq!(count_with::<voxel_art::style::falling::Falling>(&mut app).0, 0);
+    run_until(&mut app, Duration::from_secs(60), |app| {
+        shown_model(app).is_some_and(|m| (m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5)
+    });
+    settle(&mut app);
+    assert_shows_model(&mut app);
 }

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
-use voxel_art::args::AppArgs;
+use voxel_art::config::AppArgs;
 use voxel_art::instancing::{VoxelCloud, VoxelPool, VoxelSlot, unpack_color, voxel_transform};
 use voxel_art::library::LibraryRequest;
 use voxel_art::settings::VoxelSettings;
@@ -151,7 +151,7 @@ fn a_second_switch_half_way_starts_from_where_voxels_are() {
         assert!(jump <= limit, "slot {slot} jumped {jump} (bound {limit})");
     }
     settle(&mut app);
-    assert_eq!(app.world().resource::<voxel_art::library::ModelLibrary>().current, 2);
+    assert_eq!(app.world().resource::<voxel_art::model::ModelLibrary>().current, 2);
     assert_shows_model(&mut app);
 }
 

@@ -10,6 +10,7 @@ mod grid;
 use bevy::math::{Vec3, Vec3A};
 use rayon::prelude::*;
 
+use crate::rng::Rng;
 use grid::{Contacts, Grid};
 
 /// Parameters of the pile.
@@ -52,7 +53,7 @@ impl PileParams {
             restitution: 0.35,
             friction: 0.25,
             damping: 1.5,
-            dt: 1.0 / 60.0,
+            dt: crate::schedule::FIXED_STEP.as_secs_f32(),
             separation_speed: cell,
             contact_friction: 0.5,
             iterations: 6,
@@ -108,13 +109,8 @@ struct Scratch {
 impl Pile {
     /// Spheres at `positions`, at rest, each nudged by a tiny seeded jitter so stacks topple.
     pub fn new(positions: Vec<Vec3>, params: PileParams, seed: u64) -> Self {
-        let mut state = seed ^ 0x9e37_79b9_7f4a_7c15;
-        let mut jitter = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.4
-        };
+        let mut rng = Rng::new(seed);
+        let mut jitter = || (rng.f32() - 0.5) * 0.4;
         let velocities = positions.iter().map(|_| Vec3::new(jitter(), 0.0, jitter())).collect();
         let calm = vec![0; positions.len()];
         Self { positions, velocities, params, calm, steps: 0, scratch: Scratch::default() }

@@ -1,0 +1,85 @@
+//! The app's command line, `voxel-art [MODEL|FOLDER…] [--style S] [--screenshot out.png --frames N]`, and the
+//! starting configuration it becomes. [`AppArgs::configure`] is the one place that reads the parsed arguments:
+//! it inserts the starting resources the plugins read (no system sees the raw command line).
+
+use std::path::PathBuf;
+
+use bevy::prelude::*;
+use clap::Parser;
+
+use crate::input::PointerMode;
+use crate::library::LibrarySetup;
+use crate::screenshot::ScreenshotPlugin;
+use crate::settings::Style;
+use crate::transition::{Assignment, TransitionSettings};
+
+/// Parsed command line of the app.
+#[derive(Parser, Clone, Debug, Default)]
+#[command(
+    name = "voxel-art",
+    version,
+    about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help"
+)]
+pub struct AppArgs {
+    /// Extra models (.glb/.gltf) or folders of models to add to the shipped ones.
+    pub models: Vec<PathBuf>,
+    /// Render for --frames frames, save a screenshot of the window to this PNG and exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Frames to run before the screenshot.
+    #[arg(long, default_value_t = 120)]
+    pub frames: u32,
+    /// Leave out the shipped models (show only the ones given).
+    #[arg(long)]
+    pub no_shipped: bool,
+    /// Start with the model at this index of the list (0-based).
+    #[arg(long, default_value_t = 0)]
+    pub start: usize,
+    /// With --screenshot: once the first model has settled, switch to this model (0-based) and count
+    /// --frames from the switch (a frame of the morph).
+    #[arg(long)]
+    pub then: Option<usize>,
+    /// With --screenshot: let the pointer (where the window opened: the centre under Xvfb) repel voxels and
+    /// burst bubbles; without it a screenshot ignores the pointer.
+    #[arg(long)]
+    pub repel: bool,
+    /// Start in this style (S cycles them).
+    #[arg(long, value_enum)]
+    pub style: Option<Style>,
+    /// How voxels are matched to the next model's cells (also in the panel).
+    #[arg(long = "match", value_enum)]
+    pub assignment: Option<Assignment>,
+}
+
+impl AppArgs {
+    /// Parses `args`; on `--help` or a usage error prints it and returns the exit status to use.
+    pub fn parse_from(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
+        Self::try_parse_from(args).map_err(|e| {
+            let _ = e.print();
+            if e.use_stderr() { 2 } else { 0 }
+        })
+    }
+
+    /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
+    /// after `StatesPlugin`), when the pointer counts and the voxel-to-cell matching (call before the plugins that read them are added).
+    pub fn configure(&self, app: &mut App) {
+        app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
+        app.insert_state(self.style.unwrap_or_default());
+        app.insert_resource(match (&self.screenshot, self.repel) {
+            (Some(_), true) => PointerMode::Always,
+            (Some(_), false) => PointerMode::Never,
+            (None, _) => PointerMode::AfterMove,
+        });
+        let transition = TransitionSettings::default();
+        app.insert_resource(TransitionSettings {
+            assignment: self.assignment.unwrap_or(transition.assignment),
+            ..transition
+        });
+    }
+
+    /// The `--screenshot` capture, when asked for.
+    pub(crate) fn screenshot_plugin(&self) -> Option<ScreenshotPlugin> {
+        let path = self.screenshot.clone()?;
+        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then })
+    }
+}

@@ -1,0 +1,109 @@
+//! The models as data: the list the app cycles through, each model's status, its voxelization (the
+//! [`VoxelModelAsset`]) and the one lookup of "the current model, if it is ready". No systems live here: the
+//! `library` plugin fills the list, `voxelize` turns its entries into voxels, the rest read it.
+
+use std::sync::Arc;
+
+use bevy::gltf::Gltf;
+use bevy::prelude::*;
+use voxel_core::{TriangleSoup, Voxel, VoxelModel};
+
+/// A voxelized model as a Bevy asset, with every solid voxel (interior ones included); it dereferences to the
+/// core's [`VoxelModel`].
+#[derive(Asset, TypePath, Debug, Clone, Deref)]
+pub struct VoxelModelAsset(pub VoxelModel);
+
+impl VoxelModelAsset {
+    /// The voxels shown: only those that can be seen when `hollow`, else all.
+    pub fn shown(&self, hollow: bool) -> impl Iterator<Item = &Voxel> {
+        self.voxels.iter().filter(move |v| v.visible || !hollow)
+    }
+
+    /// How many voxels are shown.
+    pub fn shown_count(&self, hollow: bool) -> usize {
+        if hollow { self.stats.visible } else { self.voxels.len() }
+    }
+}
+
+/// Where a model is in its life.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelStatus {
+    /// The asset server is reading it.
+    Loading,
+    /// Loaded; a voxelization task runs.
+    Voxelizing,
+    /// Voxels are available.
+    Ready,
+    /// Loading or voxelizing failed; the reason, for the panel and the log.
+    Failed(String),
+}
+
+/// One model of the list.
+#[derive(Debug)]
+pub struct ModelEntry {
+    /// Display name (file stem).
+    pub name: String,
+    /// The asset path it loads from.
+    pub asset_path: String,
+    /// The loaded glTF (also spawned in its preview).
+    pub gltf: Handle<Gltf>,
+    /// Loading/voxelizing state.
+    pub status: ModelStatus,
+    /// The triangles, read once from the loaded glTF.
+    pub soup: Option<Arc<TriangleSoup>>,
+    /// The latest voxelization.
+    pub voxels: Option<Handle<VoxelModelAsset>>,
+    /// The settings generation `voxels` was made with.
+    pub voxels_generation: Option<u64>,
+    /// How long the latest voxelization took.
+    pub voxelize_ms: f32,
+}
+
+impl ModelEntry {
+    /// An entry with nothing read or voxelized yet.
+    pub fn new(name: String, asset_path: String, gltf: Handle<Gltf>, status: ModelStatus) -> Self {
+        Self { name, asset_path, gltf, status, soup: None, voxels: None, voxels_generation: None, voxelize_ms: 0.0 }
+    }
+
+    /// Its latest voxelization, if any (it may be of older settings while a new one runs).
+    pub fn latest<'a>(&self, models: &'a Assets<VoxelModelAsset>) -> Option<&'a VoxelModelAsset> {
+        self.voxels.as_ref().and_then(|h| models.get(h))
+    }
+}
+
+/// The models the app cycles through and which one is shown.
+#[derive(Resource, Debug, Default)]
+pub struct ModelLibrary {
+    /// All models, in list order.
+    pub entries: Vec<ModelEntry>,
+    /// Index of the model shown (or wanted: it may still be voxelizing).
+    pub current: usize,
+    /// The most recent error, for the panel.
+    pub last_error: Option<String>,
+}
+
+impl ModelLibrary {
+    /// The entry picked.
+    pub fn current_entry(&self) -> Option<&ModelEntry> {
+        self.entries.get(self.current)
+    }
+
+    /// The picked model's voxels when they are ready for the current settings.
+    pub fn current_ready<'a>(
+        &self,
+        models: &'a Assets<VoxelModelAsset>,
+    ) -> Option<(AssetId<VoxelModelAsset>, &'a VoxelModelAsset)> {
+        let entry = self.current_entry().filter(|e| e.status == ModelStatus::Ready)?;
+        let handle = entry.voxels.as_ref()?;
+        models.get(handle).map(|m| (handle.id(), m))
+    }
+
+    /// Records that entry `index` failed.
+    pub fn fail(&mut self, index: usize, reason: String) {
+        if let Some(e) = self.entries.get_mut(index) {
+            warn!("{}: {reason}", e.name);
+            self.last_error = Some(format!("{}: {reason}", e.name));
+            e.status = ModelStatus::Failed(reason);
+        }
+    }
+}
