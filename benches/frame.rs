@@ -28,7 +28,7 @@ fn cube_model() -> voxel_core::VoxelModel {
 }
 
 fn entry(name: &str, handle: Handle<VoxelModelAsset>) -> ModelEntry {
-    let entry = ModelEntry::new(name.into(), String::new(), Handle::default(), ModelStatus::Ready);
+    let entry = ModelEntry::new(name.into(), std::path::PathBuf::new(), String::new(), ModelStatus::Ready);
     ModelEntry { voxels: Some(handle), voxels_generation: Some(0), ..entry }
 }
 

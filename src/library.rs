@@ -1,9 +1,8 @@
-//! The library plugin: fills the model list (shipped models, command-line paths, dropped files), handles the
-//! requests that change the pick, and marks files that fail to load.
+//! The library plugin: fills the model list (shipped models, command-line paths, dropped files) and handles the
+//! requests that change the pick.
 
 use std::path::{Path, PathBuf};
 
-use bevy::asset::{AssetPath, LoadState};
 use bevy::prelude::*;
 use bevy::window::FileDragAndDrop;
 
@@ -46,19 +45,18 @@ pub enum LibraryRequest {
 pub struct LibrarySystems;
 
 impl ModelLibrary {
-    /// Adds a model by asset path; returns its index.
-    pub fn add(&mut self, asset_server: &AssetServer, name: String, asset_path: String) -> usize {
+    /// Adds the model file `path` (shown through `asset_path` in its preview); returns its index.
+    pub fn add(&mut self, name: String, path: PathBuf, asset_path: String) -> usize {
         if let Some(i) = self.entries.iter().position(|e| e.asset_path == asset_path) {
             return i;
         }
-        let gltf = asset_server.load(AssetPath::parse(&asset_path).into_owned());
-        self.entries.push(ModelEntry::new(name, asset_path, gltf, ModelStatus::Loading));
+        self.entries.push(ModelEntry::new(name, path, asset_path, ModelStatus::Loading));
         self.entries.len() - 1
     }
 
     /// Adds a file or every model in a folder; returns the index of the first added. A path that is
     /// neither becomes a failed entry, so the panel shows why.
-    pub fn add_path(&mut self, asset_server: &AssetServer, path: &Path) -> Option<usize> {
+    pub fn add_path(&mut self, path: &Path) -> Option<usize> {
         let files =
             if path.is_dir() { voxel_core::cli::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
         let mut first = None;
@@ -66,11 +64,12 @@ impl ModelLibrary {
             let name =
                 file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
             let index = if !file.is_file() {
-                self.fail_entry(name, file_asset_path(&file), format!("cannot read {}: no such file", file.display()))
+                self.fail_entry(name, &file, format!("cannot read {}: no such file", file.display()))
             } else if !voxel_core::cli::is_model_file(&file) {
-                self.fail_entry(name, file_asset_path(&file), format!("{} is not a .glb or .gltf file", file.display()))
+                self.fail_entry(name, &file, format!("{} is not a .glb or .gltf file", file.display()))
             } else {
-                self.add(asset_server, name, file_asset_path(&file))
+                let asset_path = file_asset_path(&file);
+                self.add(name, file, asset_path)
             };
             first.get_or_insert(index);
         }
@@ -81,34 +80,38 @@ impl ModelLibrary {
         first
     }
 
-    fn fail_entry(&mut self, name: String, asset_path: String, reason: String) -> usize {
+    fn fail_entry(&mut self, name: String, file: &Path, reason: String) -> usize {
         warn!("{name}: {reason}");
         self.last_error = Some(format!("{name}: {reason}"));
-        self.entries.push(ModelEntry::new(name, asset_path, Handle::default(), ModelStatus::Failed(reason)));
+        let asset_path = file_asset_path(file);
+        self.entries.push(ModelEntry::new(name, file.to_owned(), asset_path, ModelStatus::Failed(reason)));
         self.entries.len() - 1
     }
 }
 
-/// Adds the shipped models and the command-line ones.
-fn populate(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>, setup: Res<LibrarySetup>) {
+/// Adds the shipped models and the command-line ones; a start index past the list is an error that ends the
+/// app (not a silent clamp).
+fn populate(mut library: ResMut<ModelLibrary>, setup: Res<LibrarySetup>, mut exit: MessageWriter<AppExit>) {
     let shipped = if setup.shipped { vec![asset_root().join("models")] } else { Vec::new() };
     for file in voxel_core::cli::expand_inputs(&shipped) {
         if let Some(name) = file.file_name() {
             let stem = file.file_stem().unwrap_or(name).to_string_lossy().into_owned();
-            library.add(&asset_server, stem, format!("models/{}", name.to_string_lossy()));
+            let asset_path = format!("models/{}", name.to_string_lossy());
+            library.add(stem, file, asset_path);
         }
     }
     for path in &setup.extra {
-        library.add_path(&asset_server, path);
+        library.add_path(path);
     }
-    library.current = setup.start.min(library.entries.len().saturating_sub(1));
+    let n = library.entries.len();
+    if setup.start >= n.max(1) {
+        error!("--start {}: the list has {n} models (0 to {})", setup.start, n.saturating_sub(1));
+        exit.write(AppExit::error());
+    }
+    library.current = setup.start.min(n.saturating_sub(1));
 }
 
-fn handle_requests(
-    mut requests: MessageReader<LibraryRequest>,
-    mut library: ResMut<ModelLibrary>,
-    asset_server: Res<AssetServer>,
-) {
+fn handle_requests(mut requests: MessageReader<LibraryRequest>, mut library: ResMut<ModelLibrary>) {
     for request in requests.read() {
         let n = library.entries.len();
         match request {
@@ -118,7 +121,7 @@ fn handle_requests(
             LibraryRequest::Previous if n > 0 => library.current = (library.current + n - 1) % n,
             LibraryRequest::Next | LibraryRequest::Previous => {}
             LibraryRequest::Add(path) => {
-                if let Some(i) = library.add_path(&asset_server, path) {
+                if let Some(i) = library.add_path(path) {
                     library.current = i;
                 }
             }
@@ -134,23 +137,6 @@ fn dropped_files(mut drops: MessageReader<FileDragAndDrop>, mut requests: Messag
     }
 }
 
-/// Marks entries whose file failed to load.
-fn watch_loading(mut library: ResMut<ModelLibrary>, asset_server: Res<AssetServer>) {
-    let failed: Vec<(usize, String)> = library
-        .entries
-        .iter()
-        .enumerate()
-        .filter(|(_, e)| e.status == ModelStatus::Loading)
-        .filter_map(|(i, e)| match asset_server.load_state(&e.gltf) {
-            LoadState::Failed(err) => Some((i, err.to_string())),
-            _ => None,
-        })
-        .collect();
-    for (i, reason) in failed {
-        library.fail(i, reason);
-    }
-}
-
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<ModelLibrary>();
     app.init_resource::<LibrarySetup>();
@@ -159,6 +145,6 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(Startup, populate);
     app.add_systems(
         Update,
-        (dropped_files, handle_requests, watch_loading).chain().in_set(AppSystems::Simulate).in_set(LibrarySystems),
+        (dropped_files, handle_requests).chain().in_set(AppSystems::Simulate).in_set(LibrarySystems),
     );
 }

@@ -2,6 +2,7 @@
 //! [`VoxelModelAsset`]) and the one lookup of "the current model, if it is ready". No systems live here: the
 //! `library` plugin fills the list, `voxelize` turns its entries into voxels, the rest read it.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use bevy::gltf::Gltf;
@@ -28,7 +29,7 @@ impl VoxelModelAsset {
 /// Where a model is in its life.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ModelStatus {
-    /// The asset server is reading it.
+    /// The core's importer is reading the file.
     Loading,
     /// Loaded; a voxelization task runs.
     Voxelizing,
@@ -43,13 +44,17 @@ pub enum ModelStatus {
 pub struct ModelEntry {
     /// Display name (file stem).
     pub name: String,
-    /// The asset path it loads from.
+    /// The file on disk, which the core's importer reads (the one glTF reader of the app and the CLI).
+    pub path: PathBuf,
+    /// The same file as an asset path, for Bevy's glTF loader.
     pub asset_path: String,
-    /// The loaded glTF (also spawned in its preview).
+    /// The original glTF as Bevy loads it, only to show it in its preview tile. Requested once the core has
+    /// read the file, so a file the core refuses never reaches Bevy's loader, and one Bevy cannot show still
+    /// voxelizes.
     pub gltf: Handle<Gltf>,
     /// Loading/voxelizing state.
     pub status: ModelStatus,
-    /// The triangles, read once from the loaded glTF.
+    /// The triangles, read once by the core's importer.
     pub soup: Option<Arc<TriangleSoup>>,
     /// The latest voxelization.
     pub voxels: Option<Handle<VoxelModelAsset>>,
@@ -61,8 +66,18 @@ pub struct ModelEntry {
 
 impl ModelEntry {
     /// An entry with nothing read or voxelized yet.
-    pub fn new(name: String, asset_path: String, gltf: Handle<Gltf>, status: ModelStatus) -> Self {
-        Self { name, asset_path, gltf, status, soup: None, voxels: None, voxels_generation: None, voxelize_ms: 0.0 }
+    pub fn new(name: String, path: PathBuf, asset_path: String, status: ModelStatus) -> Self {
+        Self {
+            name,
+            path,
+            asset_path,
+            gltf: Handle::default(),
+            status,
+            soup: None,
+            voxels: None,
+            voxels_generation: None,
+            voxelize_ms: 0.0,
+        }
     }
 
     /// Its latest voxelization, if any (it may be of older settings while a new one runs).

@@ -1,18 +1,20 @@
 //! `--screenshot out.png --frames N [--then M]`: once the first model has settled, run N more frames (with
-//! `--then`, switch to model M first: a frame of the morph), save the window to a PNG and exit (status 0), or
-//! exit with status 1 if no model ever shows. Next to the PNG, `out.png.json`
+//! `--then`, switch to model M first: a frame of the morph), save the window to a PNG and exit (status 0). It
+//! exits with status 1, saying why, when no model can be shown (every file failed, or none settles within
+//! `MAX_WAIT_FRAMES`), when `--then` names no model of the list, and when the PNG cannot be written. Next to
+//! the PNG, `out.png.json`
 //! names where the camera projects the points a test checks: the floor under the model (in its shadow), the
 //! floor far from it, the background, and the model's most common voxel colour.
 
 use std::path::{Path, PathBuf};
 
 use bevy::prelude::*;
-use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 
 use crate::camera::MainCamera;
 use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
-use crate::model::VoxelModelAsset;
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
 use crate::stage::{Floor, KeyLight};
@@ -142,11 +144,18 @@ fn drive(
     window: Query<&Window>,
     mut started: MessageReader<TransitionStarted>,
     mut finished: MessageReader<TransitionFinished>,
+    library: Res<ModelLibrary>,
     mut requests: MessageWriter<LibraryRequest>,
     mut progress: Local<Progress>,
     mut exit: MessageWriter<AppExit>,
 ) {
     if progress.requested {
+        return;
+    }
+    if let Some(reason) = cannot_show(&library, request.then) {
+        error!("no screenshot: {reason}");
+        exit.write(AppExit::error());
+        progress.requested = true;
         return;
     }
     let morph_began = started.read().count() > 0;
@@ -186,16 +195,59 @@ fn drive(
         let probe =
             probe(camera, camera_transform, light, floor.translation().y, model, settings.hollow, window.size());
         let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
-        if let Err(e) = std::fs::write(sidecar_path(&request.path), json) {
-            error!("cannot write the screenshot probe: {e}");
+        let sidecar = sidecar_path(&request.path);
+        if let Err(e) = std::fs::write(&sidecar, json) {
+            error!("cannot write {}: {e}", sidecar.display());
+            exit.write(AppExit::error());
+            return;
         }
     }
     info!("saving screenshot to {}", request.path.display());
-    commands.spawn(Screenshot::primary_window()).observe(save_to_disk(request.path.clone())).observe(
-        |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
-            exit.write(AppExit::Success);
+    let path = request.path.clone();
+    commands.spawn(Screenshot::primary_window()).observe(
+        move |captured: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
+            let saved = captured
+                .image
+                .clone()
+                .try_into_dynamic()
+                .map_err(|e| e.to_string())
+                .and_then(|image| image.to_rgb8().save(&path).map_err(|e| e.to_string()));
+            match saved {
+                Ok(()) => {
+                    info!("screenshot saved to {}", path.display());
+                    exit.write(AppExit::Success);
+                }
+                Err(e) => {
+                    error!("cannot write the screenshot {}: {e}", path.display());
+                    exit.write(AppExit::error());
+                }
+            }
         },
     );
+}
+
+/// Why no screenshot can be taken, if it cannot: `then` names no model of the list, or every model failed.
+fn cannot_show(library: &ModelLibrary, then: Option<usize>) -> Option<String> {
+    let n = library.entries.len();
+    if let Some(then) = then.filter(|&t| t >= n) {
+        return Some(format!("--then {then}: the list has {n} models (0 to {})", n.saturating_sub(1)));
+    }
+    if library.entries.iter().all(|e| matches!(e.status, ModelStatus::Failed(_))) {
+        let reasons: Vec<String> = library
+            .entries
+            .iter()
+            .filter_map(|e| match &e.status {
+                ModelStatus::Failed(reason) => Some(format!("{}: {reason}", e.path.display())),
+                _ => None,
+            })
+            .collect();
+        return Some(if reasons.is_empty() {
+            "no models to show".to_owned()
+        } else {
+            format!("no model could be shown ({})", reasons.join("; "))
+        });
+    }
+    None
 }
 
 impl Plugin for ScreenshotPlugin {

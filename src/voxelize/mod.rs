@@ -1,20 +1,21 @@
-//! Voxelization in the app: loaded glTF assets → triangle soup → the core voxelizer on the
-//! `AsyncComputeTaskPool` → [`VoxelModelAsset`]s. A settings change re-voxelizes every model; results of
-//! stale settings are dropped (latest wins).
+//! Voxelization in the app, on the `AsyncComputeTaskPool`: the file → the core's importer (the same reader
+//! as the CLI, so the app and the CLI give the same cells and colours) → triangle soup, kept for later
+//! settings → the core voxelizer → [`VoxelModelAsset`]s. A settings change re-voxelizes every model; results
+//! of stale settings are dropped (latest wins). Once the core has read a file, Bevy's glTF loader is asked
+//! for it too, for its preview tile only.
 
-pub mod from_gltf;
-
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use bevy::gltf::{Gltf, GltfMaterial, GltfMesh, GltfNode};
+use bevy::asset::AssetPath;
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
+use voxel_core::{TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
-use from_gltf::{GltfAssets, soup_from_gltf};
 
 /// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -33,7 +34,28 @@ pub struct VoxelizeJob {
     /// The settings generation it was started with.
     pub generation: u64,
     started: Instant,
-    task: Task<Result<voxel_core::VoxelModel, String>>,
+    task: Task<JobResult>,
+}
+
+/// What a job hands back: the soup it read (or was given) and its voxels, or why the file failed.
+type JobResult = Result<(Arc<TriangleSoup>, VoxelModel), String>;
+
+/// What a job starts from: the soup read before, or the file the core's importer reads first.
+enum JobInput {
+    Read(Arc<TriangleSoup>),
+    File(PathBuf),
+}
+
+impl JobInput {
+    /// Imports (if needed) and voxelizes.
+    fn run(self, options: &voxel_core::VoxelizeOptions) -> JobResult {
+        let soup = match self {
+            JobInput::Read(soup) => soup,
+            JobInput::File(path) => Arc::new(voxel_core::load_file(&path).map_err(|e| e.to_string())?),
+        };
+        let model = voxel_core::voxelize(&soup, options).map_err(|e| e.to_string())?;
+        Ok((soup, model))
+    }
 }
 
 /// Starts a new generation when voxelization settings change.
@@ -50,38 +72,6 @@ fn track_settings(
     *last = Some(options);
 }
 
-/// Reads newly loaded models into triangle soups.
-fn read_loaded(
-    mut library: ResMut<ModelLibrary>,
-    asset_server: Res<AssetServer>,
-    gltfs: Res<Assets<Gltf>>,
-    nodes: Res<Assets<GltfNode>>,
-    meshes: Res<Assets<GltfMesh>>,
-    mesh_data: Res<Assets<Mesh>>,
-    materials: Res<Assets<GltfMaterial>>,
-    images: Res<Assets<Image>>,
-) {
-    let assets =
-        GltfAssets { nodes: &nodes, meshes: &meshes, mesh_data: &mesh_data, materials: &materials, images: &images };
-    let mut failures = Vec::new();
-    for (i, entry) in library.entries.iter_mut().enumerate() {
-        if entry.status != ModelStatus::Loading || !asset_server.is_loaded_with_dependencies(&entry.gltf) {
-            continue;
-        }
-        let Some(gltf) = gltfs.get(&entry.gltf) else { continue };
-        match soup_from_gltf(gltf, &assets) {
-            Ok(soup) => {
-                entry.soup = Some(Arc::new(soup));
-                entry.status = ModelStatus::Voxelizing;
-            }
-            Err(reason) => failures.push((i, reason)),
-        }
-    }
-    for (i, reason) in failures {
-        library.fail(i, reason);
-    }
-}
-
 /// Starts a job for every model whose voxels are missing or stale and that has no current job.
 fn start_jobs(
     mut commands: Commands,
@@ -94,7 +84,6 @@ fn start_jobs(
     let options = settings.voxelize_options(*style.get());
     let pool = AsyncComputeTaskPool::get();
     for (i, entry) in library.entries.iter_mut().enumerate() {
-        let Some(soup) = entry.soup.clone() else { continue };
         if matches!(entry.status, ModelStatus::Failed(_)) || entry.voxels_generation == Some(generation.0) {
             continue;
         }
@@ -108,29 +97,41 @@ fn start_jobs(
             }
         }
         if !running {
-            entry.status = ModelStatus::Voxelizing;
-            let task = pool.spawn(async move { voxel_core::voxelize(&soup, &options).map_err(|e| e.to_string()) });
+            let input = match &entry.soup {
+                Some(soup) => JobInput::Read(soup.clone()),
+                None => JobInput::File(entry.path.clone()),
+            };
+            entry.status = if entry.soup.is_some() { ModelStatus::Voxelizing } else { ModelStatus::Loading };
+            let task = pool.spawn(async move { input.run(&options) });
             commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), task });
         }
     }
 }
 
-/// Collects finished jobs; results of an older generation are dropped.
+/// Collects finished jobs: keeps the soup read, asks Bevy for the original glTF (for the preview) the first
+/// time, and stores the voxels; voxels of an older generation are dropped.
 fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    asset_server: Res<AssetServer>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
         let Some(result) = check_ready(&mut job.task) else { continue };
         commands.entity(entity).despawn();
+        if let (Ok((soup, _)), Some(entry)) = (&result, library.entries.get_mut(job.entry))
+            && entry.soup.is_none()
+        {
+            entry.soup = Some(soup.clone());
+            entry.gltf = asset_server.load(AssetPath::parse(&entry.asset_path).into_owned());
+        }
         if job.generation != generation.0 {
             continue;
         }
         match result {
-            Ok(model) => {
+            Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
                     entry.voxels = Some(models.add(VoxelModelAsset(model)));
                     entry.voxels_generation = Some(job.generation);
@@ -148,9 +149,6 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelizeGeneration>();
     app.add_systems(
         Update,
-        (track_settings, read_loaded, start_jobs, finish_jobs)
-            .chain()
-            .in_set(AppSystems::Simulate)
-            .in_set(VoxelizeSystems),
+        (track_settings, start_jobs, finish_jobs).chain().in_set(AppSystems::Simulate).in_set(VoxelizeSystems),
     );
 }

@@ -34,9 +34,9 @@ fn a_shipped_model_voxelizes_like_the_core_does() {
         let entry = &library.entries[i];
         let app_model = app.world().resource::<Assets<VoxelModelAsset>>().get(entry.voxels.as_ref().unwrap()).unwrap();
         let core_model = core_voxelize(&shipped(&format!("{}.glb", entry.name)), &options);
-        // The Bevy front door (loaded Gltf assets) and the gltf-crate one give the same voxels.
+        // One reader: the app gives the cells and colours the core (and so the CLI) gives.
         assert_eq!(app_model.stats, core_model.stats, "{}", entry.name);
-        assert_eq!(app_model.voxels.len(), core_model.voxels.len(), "{}", entry.name);
+        assert!(app_model.voxels == core_model.voxels, "{}: other cells or colours", entry.name);
     }
 }
 
@@ -116,6 +116,92 @@ fn a_bad_file_becomes_an_error_entry_and_the_app_goes_on() {
     }
     assert_eq!(app.world().resource::<ModelLibrary>().current, bad);
     assert!(app.world().resource::<VoxelPool>().shown.is_some());
+}
+
+/// Every model file of the corpus: the top folder's and its subfolders'.
+fn corpus_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut folders = vec![dir.to_owned()];
+    folders.extend(std::fs::read_dir(dir).unwrap().flatten().map(|e| e.path()).filter(|p| p.is_dir()));
+    let mut files = voxel_core::cli::expand_inputs(&folders);
+    files.sort();
+    files
+}
+
+#[test]
+fn the_app_voxelizes_every_corpus_model_as_the_cli_does() {
+    let Some(dir) = crate::common::models_dir() else { return };
+    let files = corpus_files(&dir);
+    assert!(files.len() >= 15, "{} corpus files", files.len());
+    let mut app = test_app(AppArgs { models: files.clone(), no_shipped: true, ..default() });
+    run_until(&mut app, Duration::from_secs(600), all_settled);
+    let options = app_options(&app);
+    let library = app.world().resource::<ModelLibrary>();
+    assert_eq!(library.entries.len(), files.len());
+    let mut ready = 0;
+    for entry in &library.entries {
+        let core = voxel_core::load_file(&entry.path).and_then(|soup| voxel_core::voxelize(&soup, &options));
+        match (&entry.status, core) {
+            (ModelStatus::Ready, Ok(core_model)) => {
+                let app_model = entry.latest(app.world().resource::<Assets<VoxelModelAsset>>()).unwrap();
+                assert_eq!(app_model.stats, core_model.stats, "{}", entry.path.display());
+                assert!(app_model.voxels == core_model.voxels, "{}: other cells or colours", entry.path.display());
+                ready += 1;
+            }
+            (ModelStatus::Failed(reason), Err(e)) => assert_eq!(reason, &e.to_string(), "{}", entry.path.display()),
+            (status, core) => panic!("{}: app {status:?}, core {:?}", entry.path.display(), core.map(|m| m.stats)),
+        }
+    }
+    assert!(ready >= 15, "only {ready} corpus models voxelized");
+}
+
+/// A one-triangle .glb whose COLOR_0 accessor has two elements for three positions (Bevy's glTF loader panics
+/// on it in `Mesh::duplicate_vertices`).
+fn short_color_glb() -> Vec<u8> {
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let colors: [f32; 8] = [1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0];
+    let bin: Vec<u8> = positions.iter().chain(&colors).flat_map(|f| f.to_le_bytes()).collect();
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 1}}]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 32}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 2, "type": "VEC4"}
+        ]
+    });
+    voxel_core::glb::pack(&json, &bin)
+}
+
+#[test]
+fn a_file_bevy_cannot_load_is_marked_with_the_cores_reason_and_the_app_goes_on() {
+    let bad = temp_file("short-colours.glb", &short_color_glb());
+    let mut app = test_app(AppArgs { models: vec![bad.clone()], ..default() });
+    run_until(&mut app, LIMIT, all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    let entry = library.entries.iter().find(|e| e.name == "short-colours").unwrap();
+    let ModelStatus::Failed(reason) = &entry.status else { panic!("loaded: {:?}", entry.status) };
+    assert!(reason.contains("COLOR_0 has 2 elements but POSITION has 3"), "{reason}");
+    let expected = voxel_core::load_file(&bad).unwrap_err().to_string();
+    assert_eq!(reason, &expected, "the app names what the CLI names");
+    assert!(entry.gltf == Handle::default(), "a file the core refuses is never handed to Bevy's loader");
+    assert!(library.entries.iter().filter(|e| e.status == ModelStatus::Ready).count() >= 6);
+    assert!(app.should_exit().is_none(), "the app goes on");
+}
+
+#[test]
+fn a_start_index_past_the_list_is_an_error() {
+    let mut app = test_app(AppArgs { start: 40, ..default() });
+    app.update();
+    assert_eq!(app.should_exit(), Some(AppExit::error()));
+    let mut app = test_app(AppArgs { start: 2, ..default() });
+    app.update();
+    assert_eq!(app.should_exit(), None);
+    assert_eq!(app.world().resource::<ModelLibrary>().current, 2);
 }
 
 #[test]

@@ -32,24 +32,53 @@ fn sample(img: &image::RgbaImage, at: [f32; 2]) -> [u8; 3] {
     sum.map(|s| (s / n.max(1)) as u8)
 }
 
-/// Runs `voxel-art --screenshot` under Xvfb with lavapipe; `None` when Xvfb is not installed.
-fn screenshot(out: &Path, frames: u32) -> Option<std::process::Output> {
+/// Runs `voxel-art ARGS` under Xvfb with lavapipe; `None` when Xvfb is not installed (a failure under `CI=true`).
+fn run_app(args: &[&std::ffi::OsStr]) -> Option<std::process::Output> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
+        assert!(std::env::var("CI").as_deref() != Ok("true"), "xvfb-run is not installed (CI=true: it is required)");
         println!("skipped: xvfb-run is not installed (apt-get install xvfb xauth mesa-vulkan-drivers)");
         return None;
     }
     let runtime = scratch_dir("xdg");
     let output = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1280x720x24", env!("CARGO_BIN_EXE_voxel-art")])
-        .arg("--screenshot")
-        .arg(out)
-        .args(["--frames", &frames.to_string()])
+        .args(args)
         .env("VK_ICD_FILENAMES", "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json")
         .env("WGPU_BACKEND", "vulkan")
         .env("XDG_RUNTIME_DIR", runtime)
         .output()
         .unwrap();
     Some(output)
+}
+
+/// Runs `voxel-art --screenshot OUT --frames N`.
+fn screenshot(out: &Path, frames: u32) -> Option<std::process::Output> {
+    run_app(&["--screenshot".as_ref(), out.as_os_str(), "--frames".as_ref(), frames.to_string().as_ref()])
+}
+
+/// Runs a screenshot that must fail: a non-zero status and `reason` in what it printed.
+fn assert_screenshot_fails(args: &[&std::ffi::OsStr], reason: &str) {
+    let Some(run) = run_app(args) else { return };
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "exit status {} for {args:?}", run.status);
+    assert!(stderr.contains(reason), "no '{reason}' in:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_screenshot_that_cannot_be_taken_or_written_exits_with_the_reason() {
+    let dir = scratch_dir("screenshot-errors");
+    let junk = dir.join("junk.glb");
+    std::fs::write(&junk, b"not a model").unwrap();
+    let out = dir.join("out.png");
+    let only_junk = ["--no-shipped".as_ref(), junk.as_os_str(), "--screenshot".as_ref(), out.as_os_str()];
+    assert_screenshot_fails(&only_junk, "no model could be shown");
+    let then = ["--screenshot".as_ref(), out.as_os_str(), "--then".as_ref(), "99".as_ref()];
+    assert_screenshot_fails(&then, "--then 99");
+    let unwritable = dir.join("junk.glb").join("out.png");
+    let args = ["--screenshot".as_ref(), unwritable.as_os_str(), "--frames".as_ref(), "1".as_ref()];
+    assert_screenshot_fails(&args, "cannot write");
+    assert!(!out.exists());
 }
 
 #[test]
