@@ -1,12 +1,14 @@
-//! The app's command line, `voxel-art [MODEL|FOLDER…] [--style S] [--screenshot out.png --frames N]`, and the
-//! starting configuration it becomes. [`AppArgs::configure`] is the one place that reads the parsed arguments:
-//! it inserts the starting resources the plugins read (no system sees the raw command line).
+//! The app's command line, `voxel-art [MODEL|FOLDER…] [--style S] [--export-dir DIR] [--screenshot out.png
+//! --frames N]`, and the starting configuration it becomes. [`AppArgs::configure`] is the one place that reads
+//! the parsed arguments: it inserts the starting resources the plugins read (no system sees the raw command
+//! line).
 
 use std::path::PathBuf;
 
 use bevy::prelude::*;
 use clap::Parser;
 
+use crate::export::ExportDir;
 use crate::input::PointerMode;
 use crate::library::LibrarySetup;
 use crate::screenshot::ScreenshotPlugin;
@@ -49,6 +51,10 @@ pub struct AppArgs {
     /// How voxels are matched to the next model's cells (also in the panel).
     #[arg(long = "match", value_enum)]
     pub assignment: Option<Assignment>,
+    /// Where Ctrl+S (and the panel's Export button) saves the shown model as .vox and .glb [default:
+    /// ./voxel-art-exports].
+    #[arg(long, value_name = "DIR")]
+    pub export_dir: Option<PathBuf>,
 }
 
 impl AppArgs {
@@ -61,7 +67,8 @@ impl AppArgs {
     }
 
     /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
-    /// after `StatesPlugin`), when the pointer counts and the voxel-to-cell matching (call before the plugins that read them are added).
+    /// after `StatesPlugin`), when the pointer counts, the voxel-to-cell matching and the exports folder (call
+    /// before the plugins that read them are added).
     pub fn configure(&self, app: &mut App) {
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
         app.insert_state(self.style.unwrap_or_default());
@@ -75,6 +82,7 @@ impl AppArgs {
             assignment: self.assignment.unwrap_or(transition.assignment),
             ..transition
         });
+        app.insert_resource(self.export_dir.clone().map_or_else(ExportDir::default, ExportDir));
     }
 
     /// The `--screenshot` capture, when asked for.

@@ -1,11 +1,12 @@
-//! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, S cycles styles, F drops/reassembles (falling
-//! style), R toggles mouse repel, H toggles the panel, Esc quits; a short click on the stage goes to the next
-//! model, while press-and-hold (or a drag) orbits.
+//! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, S cycles styles, Ctrl+S exports the shown model, F
+//! drops/reassembles (falling style), R toggles mouse repel, H toggles the panel, Esc quits; a short click on
+//! the stage goes to the next model, while press-and-hold (or a drag) orbits.
 
 use bevy::input::mouse::MouseButton;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
+use crate::export::ExportRequest;
 use crate::library::LibraryRequest;
 use crate::schedule::AppSystems;
 use crate::settings::{PanelOpen, RepelSettings, Style};
@@ -96,6 +97,7 @@ fn keys(
     style: Res<State<Style>>,
     mut next_style: ResMut<NextState<Style>>,
     mut fall: MessageWriter<ToggleFall>,
+    mut export: MessageWriter<ExportRequest>,
     mut exit: MessageWriter<AppExit>,
 ) {
     if keys.just_pressed(KeyCode::ArrowRight) || keys.just_pressed(KeyCode::Space) {
@@ -124,7 +126,11 @@ fn keys(
         panel.0 = !panel.0;
     }
     if keys.just_pressed(KeyCode::KeyS) {
-        next_style.set(style.get().next());
+        if keys.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight]) {
+            export.write(ExportRequest);
+        } else {
+            next_style.set(style.get().next());
+        }
     }
     if keys.just_pressed(KeyCode::KeyF) {
         fall.write(ToggleFall);

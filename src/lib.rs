@@ -3,12 +3,14 @@
 //! Plugins (one per module, `pub(super) fn plugin`): `library` (fills the [`model::ModelLibrary`]), `voxelize`
 //! (async voxelization into [`model::VoxelModelAsset`]s), `instancing` (one entity per voxel, one mesh, one
 //! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `style` (Lego, bubbles,
-//! falling, mouse repel), `input`, and the render-side `stage`, `camera`, `ui`, `preview`,
-//! `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU, for tests.
+//! falling, mouse repel), `input`, `export` (saves the shown model as .vox and .glb), and the render-side
+//! `stage`, `camera`, `ui`, `preview`, `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU,
+//! for tests.
 
 pub mod assets;
 mod camera;
 pub mod config;
+pub mod export;
 pub mod headless;
 pub mod input;
 pub mod instancing;
@@ -45,9 +47,11 @@ impl Plugin for LogicPlugin {
             transition::plugin,
             style::plugin,
             input::plugin,
+            export::plugin,
         ));
-        // The library reads files before voxelization picks them up (neither plugin names the other).
-        app.configure_sets(Update, (library::LibrarySystems, voxelize::VoxelizeSystems).chain());
+        // The library reads files before voxelization picks them up, and exports save what voxelization made
+        // (no plugin names another).
+        app.configure_sets(Update, (library::LibrarySystems, voxelize::VoxelizeSystems, export::ExportSystems).chain());
     }
 
     fn cleanup(&self, app: &mut App) {

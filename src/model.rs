@@ -20,6 +20,11 @@ impl VoxelModelAsset {
         self.voxels.iter().filter(move |v| v.visible || !hollow)
     }
 
+    /// The model as shown: only its visible voxels when `hollow`, else all of them (what an export saves).
+    pub fn shown_model(&self, hollow: bool) -> VoxelModel {
+        VoxelModel { voxels: self.shown(hollow).copied().collect(), ..self.0.clone() }
+    }
+
     /// How many voxels are shown.
     pub fn shown_count(&self, hollow: bool) -> usize {
         if hollow { self.stats.visible } else { self.voxels.len() }

@@ -4,6 +4,7 @@ use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use voxel_core::FillMode;
 
+use crate::export::{ExportRequest, ExportStatus};
 use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
@@ -124,6 +125,20 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));
 }
 
+/// The Export button (Ctrl+S) and what the last export did.
+fn export_button(ui: &mut egui::Ui, status: &ExportStatus, export: &mut MessageWriter<ExportRequest>) {
+    if ui.add_enabled(*status != ExportStatus::Writing, egui::Button::new("Export (Ctrl+S)")).clicked() {
+        export.write(ExportRequest);
+    }
+    if let Some(message) = status.message() {
+        let text = egui::RichText::new(message).small();
+        match status {
+            ExportStatus::Failed(_) => ui.colored_label(egui::Color32::from_rgb(200, 60, 60), text),
+            _ => ui.label(text),
+        };
+    }
+}
+
 fn panel(
     mut contexts: EguiContexts,
     mut settings: ResMut<VoxelSettings>,
@@ -137,6 +152,8 @@ fn panel(
     mut requests: MessageWriter<LibraryRequest>,
     mut over: ResMut<PointerOverUi>,
     mut transition: ResMut<TransitionSettings>,
+    export_status: Res<ExportStatus>,
+    mut export: MessageWriter<ExportRequest>,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
@@ -165,12 +182,13 @@ fn panel(
             }
             ui.separator();
             stats(ui, &library, &models, &pool, settings.hollow);
+            export_button(ui, &export_status, &mut export);
             if let Some(error) = &library.last_error {
                 ui.separator();
                 ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
             }
             ui.separator();
-            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · F: drop · R: repel · H: panel · Esc: quit").small());
+            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · Ctrl+S: export · F: drop · R: repel · H: panel · Esc: quit").small());
         });
     });
     // Only touch the resource when something changed, so change detection means "edited".
