@@ -89,6 +89,15 @@ fn corpus(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
+/// Calls `f` with the name (relative to `dir`) and soup of every model of `files` that loads.
+fn for_each_model(files: &[PathBuf], dir: &std::path::Path, f: impl Fn(&str, &TriangleSoup)) {
+    for file in files {
+        if let Ok(soup) = load_file(file) {
+            f(&file.strip_prefix(dir).unwrap_or(file).display().to_string(), &soup);
+        }
+    }
+}
+
 fn main() {
     let Some(dir) = models::models_dir() else { return };
     let files = corpus(&dir);
@@ -100,11 +109,7 @@ fn main() {
     if std::env::args().skip(1).any(|a| a == "passes") {
         println!("| model | triangles | R | visible | fill ms | shell ms | colour ms | colour / shell |");
         println!("|---|---:|---:|---:|---:|---:|---:|---:|");
-        for file in &files {
-            if let Ok(soup) = load_file(file) {
-                print_passes(&file.strip_prefix(&dir).unwrap_or(file).display().to_string(), &soup, 7);
-            }
-        }
+        for_each_model(&files, &dir, |name, soup| print_passes(name, soup, 7));
         let cube = TriangleSoup::from_mesh(&cuboid([-0.1; 3], [0.1; 3]), [1.0; 4]);
         print_passes("cube ±0.1 (a ±1 cube under node scale 0.1), built", &cube, 7);
         // Without its +x face: the middle of that side is far from every triangle (the colour's BVH query).
@@ -117,11 +122,7 @@ fn main() {
     if std::env::args().skip(1).any(|a| a == "fill-cost") {
         println!("| model | triangles | R | parity ms | winding ms | winding / parity |");
         println!("|---|---:|---:|---:|---:|---:|");
-        for file in &files {
-            if let Ok(soup) = load_file(file) {
-                print_fill_cost(&file.strip_prefix(&dir).unwrap_or(file).display().to_string(), &soup, 9);
-            }
-        }
+        for_each_model(&files, &dir, |name, soup| print_fill_cost(name, soup, 9));
         return;
     }
     println!(
