@@ -8,7 +8,13 @@
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- fill-cost` prints, per model and R = 32, 64, 128, the
 //! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
+//!
+//! `cargo bench -p voxel-core --bench voxelize -- fill-runs NAME R FILL N` loads the first model whose name
+//! contains NAME and voxelizes it N times at R with FILL (`winding` or `parity`), for an instruction count:
+//! under `valgrind --tool=cachegrind --cache-sim=no` with `RAYON_NUM_THREADS=1`, (Ir at N − Ir at 0) / N is
+//! one voxelization's instructions. It prints a hash of the outputs (to compare two builds).
 
+use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -117,6 +123,20 @@ fn main() {
         let positions = open.positions.clone();
         open.triangles.retain(|t| !t.iter().all(|&i| positions[i as usize][0] == 1.0));
         print_passes("cube without its +x face, built", &TriangleSoup::from_mesh(&open, [1.0; 4]), 7);
+        return;
+    }
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if let Some(at) = args.iter().position(|a| a == "fill-runs") {
+        let [name, r, fill, n] = [1, 2, 3, 4].map(|k| args.get(at + k).expect("fill-runs NAME R FILL N").as_str());
+        let fill = if fill == "parity" { FillMode::Parity } else { FillMode::Winding };
+        let options = VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), fill, ..Default::default() };
+        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
+        let soup = load_file(file).expect("load");
+        let mut hasher = std::hash::DefaultHasher::new();
+        for _ in 0..n.parse().expect("N") {
+            voxelize(&soup, &options).expect("voxelize").voxels.hash(&mut hasher);
+        }
+        println!("output hash {:016x}", hasher.finish());
         return;
     }
     if std::env::args().skip(1).any(|a| a == "fill-cost") {

@@ -33,7 +33,8 @@ use rayon::prelude::*;
 use crate::bvh::TriangleBvh;
 use crate::geom::{GridTriangle, covers_column, depth_at};
 use crate::grid::{BitGrid, GridSpec};
-use crate::orient::{Role, winding_roles};
+use crate::orient::{Role, closed_parts, winding_roles};
+use crate::soup::TriangleSoup;
 use crate::voxelize::{FillMode, Method};
 
 /// One crossing of a +Z column (`column = x * ny + y`) with a triangle, at depth `z`.
@@ -196,8 +197,9 @@ fn fill_columns(spec: &GridSpec, columns: &Columns, roles: &[Role]) -> BitGrid {
 }
 
 /// The solid by the column count, with the roles of `fill` (winding or parity) and the crossings of
-/// `method`.
+/// `method`; `tris` are `soup`'s triangles on the grid `spec`.
 pub(crate) fn solid_fill(
+    soup: &TriangleSoup,
     spec: &GridSpec,
     tris: &[GridTriangle],
     fill: FillMode,
@@ -210,7 +212,12 @@ pub(crate) fn solid_fill(
         Method::Reference => None,
     };
     let roles = match fill {
-        FillMode::Winding => winding_roles(tris, columns.as_ref(), || crossings_by_rasterizing(spec, tris)),
+        FillMode::Winding => winding_roles(
+            tris,
+            columns.as_ref(),
+            || crossings_by_rasterizing(spec, tris),
+            || closed_parts(soup, spec, tris),
+        ),
         _ => vec![Role::Parity; tris.len()],
     };
     match columns {

@@ -43,6 +43,9 @@
 //! non-manifold ones and non-orientable ones count by parity (see the column count in
 //! [`crate::fill`]), so a model made only of such parts fills exactly as whole-model parity did.
 
+mod cache;
+
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
@@ -51,6 +54,8 @@ use robust::{Coord, orient2d};
 
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
+
+pub(crate) use cache::closed_parts;
 
 /// How a triangle's column crossings count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -175,7 +180,8 @@ impl OrientingUnionFind {
 }
 
 /// The model's closed parts.
-struct Parts {
+#[derive(Debug, PartialEq)]
+pub(crate) struct Parts {
     /// The closed part of each triangle, or [`NO_PART`] (a triangle of an open sheet, or without area).
     of: Vec<u32>,
     /// Whether each triangle is reversed relative to its sheet's orientation (the one most of the sheet's
@@ -187,7 +193,7 @@ struct Parts {
 
 impl Parts {
     /// Finds the closed parts of `tris`.
-    fn find(tris: &[GridTriangle]) -> Self {
+    pub(crate) fn find(tris: &[GridTriangle]) -> Self {
         // Every edge of every triangle, keyed by a hash of its two ends (the sum of their hashes: the same
         // whichever way it is walked); the edges of triangles without three distinct corners get the key
         // `u64::MAX` and are left out below.
@@ -235,6 +241,9 @@ impl Parts {
                 None => unpaired.extend([vec![a], vec![b]]),
             }
         }
+        // In corner order, so that which sheets stay closed does not depend on the hash (nor on whether the
+        // positions are the grid's or the soup's: see `cache`).
+        unpaired.sort_unstable_by_key(|group| group[0]);
         let sheets = Sheets::of(tris, union);
         Self::close(tris, sheets, &unpaired)
     }
@@ -373,14 +382,16 @@ struct Sheets {
 
 impl Sheets {
     /// Numbers the sets of `union` in order of their first triangle and orients each as most of its
-    /// triangles are in the file.
+    /// triangles are in the file (on a tie, as its first triangle is: never as the union's root happens to
+    /// be, which depends on the order of the joins).
     fn of(tris: &[GridTriangle], mut union: OrientingUnionFind) -> Self {
         let n = tris.len();
         let mut sheet_of_root = vec![NO_PART; n];
         let mut sheets = Self { of: vec![NO_PART; n], reversed: vec![false; n], open: Vec::new() };
-        // Per sheet: triangles, and how many are reversed relative to the root.
+        // Per sheet: triangles, how many are reversed relative to the root, and whether the first is.
         let mut size: Vec<usize> = Vec::new();
         let mut against_root: Vec<usize> = Vec::new();
+        let mut first_against_root: Vec<bool> = Vec::new();
         for (t, tri) in tris.iter().enumerate() {
             if !has_area(tri.map(position_key)) {
                 continue;
@@ -391,6 +402,7 @@ impl Sheets {
                 sheets.open.push(union.contradiction[root as usize]);
                 size.push(0);
                 against_root.push(0);
+                first_against_root.push(reversed);
             }
             let s = sheet_of_root[root as usize];
             sheets.of[t] = s;
@@ -398,9 +410,12 @@ impl Sheets {
             size[s as usize] += 1;
             against_root[s as usize] += usize::from(reversed);
         }
+        let flip: Vec<bool> = (0..size.len())
+            .map(|s| 2 * against_root[s] > size[s] || (2 * against_root[s] == size[s] && first_against_root[s]))
+            .collect();
         for t in 0..n {
             let s = sheets.of[t] as usize;
-            if s != NO_PART as usize && 2 * against_root[s] > size[s] {
+            if s != NO_PART as usize && flip[s] {
                 sheets.reversed[t] = !sheets.reversed[t];
             }
         }
@@ -416,11 +431,14 @@ fn same_edge_groups(tris: &[GridTriangle], mut corners: Vec<u32>) -> Vec<Vec<u32
 }
 
 /// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
-/// model's column crossings when the caller has them; otherwise `crossings` computes them.
+/// model's column crossings when the caller has them; otherwise `crossings` computes them. `closed_parts`
+/// gives the closed parts of `tris` ([`Parts::find`], or [`closed_parts`] reusing a soup's), when the
+/// triangles as in the file do not do.
 pub(crate) fn winding_roles(
     tris: &[GridTriangle],
     columns: Option<&Columns>,
     crossings: impl FnOnce() -> Columns,
+    closed_parts: impl FnOnce() -> Arc<Parts>,
 ) -> Vec<Role> {
     let computed;
     let columns = match columns {
@@ -434,7 +452,7 @@ pub(crate) fn winding_roles(
     if consistent_as_in_file(columns, &as_in_file) {
         return as_in_file;
     }
-    let parts = Parts::find(tris);
+    let parts = closed_parts();
     // Signed volume (×6) of each closed part with its sheets oriented as in the file.
     let mut volume = vec![0.0f64; parts.count];
     for (t, tri) in tris.iter().enumerate() {
@@ -536,7 +554,7 @@ mod tests {
         let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(4), 1.0, 1 << 20).unwrap();
         let tris = spec.grid_triangles(&soup);
-        winding_roles(&tris, None, || crossings_by_rasterizing(&spec, &tris))
+        winding_roles(&tris, None, || crossings_by_rasterizing(&spec, &tris), || Arc::new(Parts::find(&tris)))
     }
 
     fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {

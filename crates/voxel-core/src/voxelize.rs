@@ -199,7 +199,7 @@ fn voxelize_within_timed(
     }
     let bvh = OnceLock::new();
     let fill = match options.fill {
-        FillMode::Winding | FillMode::Parity => solid_fill(&spec, &tris, options.fill, options.method, &bvh),
+        FillMode::Winding | FillMode::Parity => solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh),
         FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
     };
     let filled = Instant::now();
