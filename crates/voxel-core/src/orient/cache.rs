@@ -1,18 +1,20 @@
-//! The closed parts of a soup, found once in the soup's own coordinates and reused at every grid.
+//! The closed parts of a soup, found once and reused at every grid.
 //!
 //! The app voxelizes the same soup again at every grid size the user picks, and the part analysis (welding,
 //! sheets, closed parts: see [`super`]) is most of what the winding fill costs over parity on a model whose
-//! columns do not balance as in the file. It depends only on which corners are at the same position, so it is
-//! found once with the soup's positions and reused for every grid on which no two of the soup's different
-//! positions land on the same grid point (the grid's snapping can weld two corners less than a snapping step
-//! apart: then the grid's own positions are analysed, as before). The result is the one the grid's positions
-//! give, whichever positions are welded: the analysis depends on the welding only, not on the positions' hash
-//! order (ties and non-manifold edges are decided in triangle and corner order).
+//! columns do not balance as in the file. It depends only on which corners are at the same position, so the
+//! parts of the soup's own positions serve every grid on which no two of the soup's different positions land
+//! on the same grid point (checked at every grid; the grid's snapping can weld two corners less than a
+//! snapping step apart, and then that grid's own positions are analysed). The analysis depends on the welding
+//! only, not on the positions' hash order (ties and non-manifold edges are decided in triangle and corner
+//! order), so the parts are the ones the grid's positions give.
 //!
-//! The last few soups are kept, each with a copy of its corner positions: a soup is recognised by comparing
-//! them bit for bit, so a soup changed since (a new pose, an edited mesh) is analysed anew. A soup is analysed
-//! in its own coordinates when it is voxelized a second time: one voxelized once (the command line's files)
-//! costs only the copy over the analysis of its grid.
+//! The last four soups are kept, each with a copy of its corner positions: a soup is recognised by comparing
+//! them bit for bit, so a soup changed since (a new pose, an edited mesh) is analysed anew. A soup seen for
+//! the first time is analysed on its grid; when it is voxelized again, its distinct positions are found, and
+//! the parts of its first grid are the soup's when that grid kept them apart (else the soup's own positions
+//! are analysed). So a soup voxelized once (the command line's files) costs only the copy of its positions
+//! over the analysis of its grid.
 
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
@@ -33,6 +35,8 @@ static RECENT: Mutex<Vec<Arc<SoupParts>>> = Mutex::new(Vec::new());
 struct SoupParts {
     /// The soup's corner positions (as bits): what recognises it.
     corners: Vec<[u32; 3]>,
+    /// The grid the soup was first voxelized on, and the parts found there.
+    first: (GridSpec, Arc<Parts>),
     /// The analysis of its own positions.
     analysed: OnceLock<Analysis>,
 }
@@ -46,24 +50,29 @@ struct Analysis {
 }
 
 impl SoupParts {
-    /// Recognises `soup` from now on.
-    fn new(soup: &TriangleSoup) -> Self {
+    /// Recognises `soup` from now on; `parts` were found on the grid `spec`.
+    fn new(soup: &TriangleSoup, spec: GridSpec, parts: Arc<Parts>) -> Self {
         Self {
             corners: soup.vertices.iter().map(|v| v.position.map(f32::to_bits)).collect(),
+            first: (spec, parts),
             analysed: OnceLock::new(),
         }
     }
 
-    /// The analysis of `soup`'s own positions (found on the first call).
+    /// The analysis of `soup`'s own positions (found on the first call): the first grid's parts when that
+    /// grid kept the soup's positions apart (the usual case), else those of the soup's positions.
     fn analysis(&self, soup: &TriangleSoup) -> &Analysis {
         self.analysed.get_or_init(|| {
-            let tris: Vec<GridTriangle> = soup
-                .vertices
-                .chunks_exact(3)
-                .map(|t| [0, 1, 2].map(|k| DVec3::from(t[k].position.map(f64::from))))
-                .collect();
             let positions: Vec<[f32; 3]> = soup.vertices.iter().map(|v| v.position).collect();
-            Analysis { distinct: distinct(&positions), parts: Arc::new(Parts::find(&tris)) }
+            let distinct = distinct(&positions);
+            let parts = if keeps_apart(&self.first.0, &distinct) {
+                Arc::clone(&self.first.1)
+            } else {
+                let tris: Vec<GridTriangle> =
+                    positions.chunks_exact(3).map(|t| [0, 1, 2].map(|k| DVec3::from(t[k].map(f64::from)))).collect();
+                Arc::new(Parts::find(&tris))
+            };
+            Analysis { distinct, parts }
         })
     }
 
@@ -88,11 +97,11 @@ pub(crate) fn closed_parts(soup: &TriangleSoup, spec: &GridSpec, tris: &[GridTri
         })
     };
     let Some(entry) = found else {
+        let parts = Arc::new(Parts::find(tris));
         let mut recent = RECENT.lock().unwrap_or_else(PoisonError::into_inner);
-        recent.insert(0, Arc::new(SoupParts::new(soup)));
+        recent.insert(0, Arc::new(SoupParts::new(soup, *spec, Arc::clone(&parts))));
         recent.truncate(KEPT);
-        drop(recent);
-        return Arc::new(Parts::find(tris));
+        return parts;
     };
     // Analysed outside the lock: another soup's voxelization need not wait for this one.
     let analysis = entry.analysis(soup);
@@ -186,8 +195,11 @@ mod tests {
             assert_eq!(*parts, Parts::find(&tris), "R={r}");
             assert_eq!(parts.count, 0);
         }
-        // Recognised by its positions only.
-        let analysed = SoupParts::new(&soup);
+        // Recognised by its positions only; the first grid's parts are the soup's.
+        let spec = spec(&soup, 16);
+        let parts = Arc::new(Parts::find(&spec.grid_triangles(&soup)));
+        let analysed = SoupParts::new(&soup, spec, Arc::clone(&parts));
+        assert!(Arc::ptr_eq(&analysed.analysis(&soup).parts, &parts));
         let mut moved = soup.clone();
         assert!(analysed.is_of(&moved));
         moved.vertices[0].position[2] = 0.5;
@@ -203,6 +215,8 @@ mod tests {
         assert!(!keeps_apart(&spec, &distinct(&positions(&soup))));
         let parts = closed_parts(&soup, &spec, &tris);
         assert_eq!(*parts, Parts::find(&tris));
-        assert_eq!((parts.count, SoupParts::new(&soup).analysis(&soup).parts.count), (1, 0));
+        // First seen on that grid, the soup is analysed with its own positions.
+        let seen = SoupParts::new(&soup, spec, Arc::clone(&parts));
+        assert_eq!((parts.count, seen.analysis(&soup).parts.count), (1, 0));
     }
 }
