@@ -10,9 +10,10 @@
 //! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- fill-runs NAME R FILL N` loads the first model whose name
-//! contains NAME and voxelizes it N times at R with FILL (`winding` or `parity`), for an instruction count:
+//! contains NAME and voxelizes it N times at R (or at each of a list, `32,48,64`: the app's grid slider) with
+//! FILL (`winding` or `parity`), for an instruction count:
 //! under `valgrind --tool=cachegrind --cache-sim=no` with `RAYON_NUM_THREADS=1`, (Ir at N − Ir at 0) / N is
-//! one voxelization's instructions. It prints a hash of the outputs (to compare two builds).
+//! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
 
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
@@ -129,14 +130,20 @@ fn main() {
     if let Some(at) = args.iter().position(|a| a == "fill-runs") {
         let [name, r, fill, n] = [1, 2, 3, 4].map(|k| args.get(at + k).expect("fill-runs NAME R FILL N").as_str());
         let fill = if fill == "parity" { FillMode::Parity } else { FillMode::Winding };
-        let options = VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), fill, ..Default::default() };
+        let options =
+            |r: &str| VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), fill, ..Default::default() };
         let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
         let soup = load_file(file).expect("load");
-        let mut hasher = std::hash::DefaultHasher::new();
+        let resolutions: Vec<&str> = r.split(',').collect();
+        let mut hashers = vec![std::hash::DefaultHasher::new(); resolutions.len()];
         for _ in 0..n.parse().expect("N") {
-            voxelize(&soup, &options).expect("voxelize").voxels.hash(&mut hasher);
+            for (r, hasher) in resolutions.iter().zip(&mut hashers) {
+                voxelize(&soup, &options(r)).expect("voxelize").voxels.hash(hasher);
+            }
         }
-        println!("output hash {:016x}", hasher.finish());
+        for (r, hasher) in resolutions.iter().zip(&hashers) {
+            println!("R={r}: output hash {:016x}", hasher.finish());
+        }
         return;
     }
     if std::env::args().skip(1).any(|a| a == "fill-cost") {
