@@ -606,6 +606,17 @@ mod tests {
     }
 
     #[test]
+    fn a_sheet_split_half_and_half_faces_as_its_first_triangle() {
+        // Every other triangle reversed: six each way. The sheet takes the first triangle's facing (reversed
+        // in the file), whatever the order of the joins; the part is then inside out, on its own, and flipped.
+        let half = reversed(block(), 2);
+        let parts = Parts::find(&grid_tris(&half));
+        assert_eq!(parts.count, 1);
+        assert_eq!(parts.reversed, (0..12).map(|t| t % 2 == 1).collect::<Vec<_>>());
+        assert_eq!(roles(&half)[8..], roles(&block())[8..]);
+    }
+
+    #[test]
     fn a_cavity_facing_inwards_is_kept() {
         let mut hollow = block();
         let inner = reversed(cuboid([1.25; 3], [2.75; 3]), 1);
