@@ -9,6 +9,7 @@ use voxel_core::{
     voxelize_within,
 };
 
+#[cfg(feature = "cli")]
 use voxel_core::cli_animation::{ClipRequest, voxelize_clip};
 
 use crate::common::{at_resolution, glb, model};
@@ -417,6 +418,7 @@ fn the_milk_trucks_wheels_turn_rigidly_and_its_body_stays() {
 }
 
 /// Writes `bytes` to a fresh temporary folder as `name`; returns the folder.
+#[cfg(feature = "cli")]
 fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("voxel-core-anim-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -425,10 +427,12 @@ fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     dir
 }
 
+#[cfg(feature = "cli")]
 fn run(args: &[&std::ffi::OsStr]) -> i32 {
     voxel_core::cli::run(std::iter::once("voxel-art voxelize".into()).chain(args.iter().map(|a| a.to_os_string())))
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn the_cli_writes_one_vox_per_frame_of_a_clip() {
     let dir = temp_model("cube.glb", &morph_cube(None));
@@ -461,13 +465,14 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
     assert_eq!(run(&[file.as_os_str(), "--fps".as_ref(), "4".as_ref()]), 2);
     let still = temp_model(
         "still.glb",
-        &voxel_core::glb::soup_to_glb(voxel_core::load_slice(&morph_cube(None), None).as_ref().unwrap()),
+        &voxel_core::glb::soup_to_glb(voxel_core::load_slice(&morph_cube(None), None).as_ref().unwrap()).unwrap(),
     );
     assert_eq!(run(&[still.join("still.glb").as_os_str(), "--animation".as_ref(), "list".as_ref()]), 1);
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&still).unwrap();
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn the_cli_reports_every_frame_as_json_and_names_bad_requests() {
     let dir = temp_model("slide.glb", &morph_cube(None));
