@@ -1,4 +1,4 @@
-//! The headless `voxel-art voxelize` command: batch voxelization with stats and .vox export.
+//! The headless `voxel-art voxelize` command: batch voxelization with stats and .vox or glTF export.
 
 use std::ffi::OsString;
 use std::io::{IsTerminal, Write};
@@ -58,9 +58,9 @@ pub struct VoxelizeArgs {
     /// (one <name>.<format> each) for several.
     #[arg(long, short = 'o')]
     out: Option<PathBuf>,
-    /// Export format, overriding the --out extension (the format of a folder's files; default vox). Not
-    /// with --animation, whose frames are .vox.
-    #[arg(long, value_enum, conflicts_with = "animation")]
+    /// Export format, overriding the --out extension (the format of a folder's files, --animation's frames
+    /// included; default vox).
+    #[arg(long, value_enum)]
     format: Option<Format>,
     /// Print one JSON object per line per file instead of a readable summary.
     #[arg(long)]
@@ -69,7 +69,7 @@ pub struct VoxelizeArgs {
     #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
     max_cells: u64,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
-    /// --out is then a folder of <name>-<frame>.vox files.
+    /// --out is then a folder of <name>-<frame>.<format> files.
     #[arg(long)]
     animation: Option<String>,
     /// Frames per second of --animation.
@@ -122,6 +122,14 @@ struct Report<'a> {
     output_voxels: usize,
     load_ms: f64,
     voxelize_ms: f64,
+    #[serde(flatten)]
+    exported: Exported,
+}
+
+/// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
+#[derive(Debug, Default, PartialEq, serde::Serialize)]
+pub(crate) struct Exported {
+    /// The .vox written.
     #[serde(skip_serializing_if = "Option::is_none")]
     vox: Option<String>,
     /// The .glb or .gltf written.
@@ -132,8 +140,30 @@ struct Report<'a> {
     mesh: Option<MeshStats>,
 }
 
+impl Exported {
+    /// What writing `path` wrote.
+    pub(crate) fn new(path: &Path, written: Written) -> Self {
+        let path = Some(path.display().to_string());
+        match written {
+            Written::Vox(_) => Self { vox: path, ..Self::default() },
+            Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
+        }
+    }
+
+    /// The end of a readable line: `, wrote <path>` (with the mesh's figures for a glTF), or nothing.
+    pub(crate) fn summary(&self) -> String {
+        match (self.vox.as_ref().or(self.gltf.as_ref()), self.mesh) {
+            (Some(p), Some(m)) => {
+                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
+            }
+            (Some(p), None) => format!(", wrote {p}"),
+            (None, _) => String::new(),
+        }
+    }
+}
+
 /// The name of an input model: its file stem.
-fn stem(input: &Path) -> String {
+pub(crate) fn stem(input: &Path) -> String {
     input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
 }
 
@@ -148,6 +178,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             fps: args.fps,
             duration: args.duration,
             out: args.out.as_deref(),
+            format: args.format(true),
             json: args.json,
         };
         return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
@@ -158,7 +189,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
     let t1 = Instant::now();
     let model = voxelize(&soup, options)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
-    let written = match &args.out {
+    let exported = match &args.out {
         Some(out) => {
             if several {
                 std::fs::create_dir_all(out)
@@ -167,14 +198,9 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             let format = args.format(several);
             let path = export_path(out, file, several, format);
             let written = export::write(&model, &path, format, &ExportOptions { name: stem(file) })?;
-            Some((path.display().to_string(), written))
+            Exported::new(&path, written)
         }
-        None => None,
-    };
-    let (vox, gltf, mesh) = match written {
-        Some((path, Written::Vox(_))) => (Some(path), None, None),
-        Some((path, Written::Mesh(stats))) => (None, Some(path), Some(stats)),
-        None => (None, None, None),
+        None => Exported::default(),
     };
     let s = model.stats;
     let name = file.display().to_string();
@@ -190,20 +216,12 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             output_voxels: model.voxels.len(),
             load_ms,
             voxelize_ms,
-            vox,
-            gltf,
-            mesh,
+            exported,
         };
         serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
     } else {
         let [nx, ny, nz] = s.grid;
-        let written = match (vox.or(gltf), mesh) {
-            (Some(p), Some(m)) => {
-                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
-            }
-            (Some(p), None) => format!(", wrote {p}"),
-            (None, _) => String::new(),
-        };
+        let written = exported.summary();
         Ok(format!(
             "{name}: {} triangles -> {nx}x{ny}x{nz} grid, {} voxels ({} surface, {} visible, {} output), {} colours; load {load_ms:.1} ms, voxelize {voxelize_ms:.1} ms{written}",
             s.triangles,

@@ -131,4 +131,19 @@ mod tests {
         assert_eq!(back.materials[0].base_color, [1.0, 0.0, 0.0, 1.0]);
         assert_eq!(back.vertices, soup.vertices);
     }
+
+    #[test]
+    fn the_container_pads_both_chunks_and_leaves_out_an_empty_bin() {
+        let json = br#"{"asset":{"version":"2.0"}}"#;
+        let packed = pack(json, &[1, 2, 3]).unwrap();
+        // Header, JSON chunk (27 bytes padded to 28), BIN chunk (3 padded to 4).
+        assert_eq!(packed.len(), 12 + 8 + 28 + 8 + 4);
+        assert_eq!(packed[8..12], (packed.len() as u32).to_le_bytes());
+        let glb = gltf::binary::Glb::from_slice(&packed).unwrap();
+        assert_eq!(*glb.json, [&json[..], b" "].concat());
+        assert_eq!(glb.bin.as_deref(), Some(&[1, 2, 3, 0][..]));
+        let without_bin = pack(b"{}", &[]).unwrap();
+        assert_eq!(without_bin.len(), 12 + 8 + 4);
+        assert!(gltf::binary::Glb::from_slice(&without_bin).unwrap().bin.is_none());
+    }
 }
