@@ -429,6 +429,15 @@ fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     dir
 }
 
+/// The names of the files in `dir`, sorted.
+#[cfg(feature = "cli")]
+fn file_names(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
 #[cfg(feature = "cli")]
 fn run(args: &[&std::ffi::OsStr]) -> i32 {
     voxel_core::cli::run(std::iter::once("voxel-art voxelize".into()).chain(args.iter().map(|a| a.to_os_string())))
@@ -451,9 +460,7 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
         out.as_os_str(),
     ]);
     assert_eq!(status, 0);
-    let mut written: Vec<String> =
-        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    written.sort();
+    let written = file_names(&out);
     assert_eq!(written, (0..8).map(|k| format!("cube-{k:04}.vox")).collect::<Vec<_>>());
     // The cube slides along x by 2 per second: frame 0 and frame 4 (t = 1) are different models.
     let first = dot_vox::load(out.join("cube-0000.vox").to_str().unwrap()).unwrap();
@@ -487,9 +494,7 @@ fn glb_frames_import_back_with_each_frames_cells() {
     let request =
         ClipRequest { animation: "0", fps: 4.0, duration: None, out: Some(&out), format: Format::Glb, json: true };
     let lines = voxelize_clip(&file, &request, &options).unwrap();
-    let mut written: Vec<String> =
-        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    written.sort();
+    let written = file_names(&out);
     assert_eq!(written, (0..8).map(|k| format!("box-{k:04}.glb")).collect::<Vec<_>>());
     let (lo, hi) = load_animated_file(&file).unwrap().clip_bounds(0).unwrap();
     assert_eq!((lo, hi), ([0.0; 3], [6.0, 1.0, 1.0]));
@@ -524,9 +529,7 @@ fn glb_frames_import_back_with_each_frames_cells() {
     let args = ["-r", "24", "--animation", "0", "--fps", "4", "--format", "gltf", "--duration", "0.5", "--out"];
     let status = run(&[&[file.as_os_str()], &args.map(std::ffi::OsStr::new)[..], &[gltf.as_os_str()]].concat());
     assert_eq!(status, 0);
-    let mut written: Vec<String> =
-        std::fs::read_dir(&gltf).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    written.sort();
+    let written = file_names(&gltf);
     assert_eq!(written, ["box-0000.bin", "box-0000.gltf", "box-0001.bin", "box-0001.gltf"]);
     let first = voxel_core::load_file(&gltf.join("box-0000.gltf")).unwrap();
     assert_eq!(first.vertices, voxel_core::load_file(&out.join("box-0000.glb")).unwrap().vertices);
