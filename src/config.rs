@@ -22,7 +22,7 @@ use crate::transition::{Assignment, TransitionSettings};
     version,
     propagate_version = true,
     args_conflicts_with_subcommands = true,
-    about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help"
+    about = "Turns glTF/GLB models into animated voxel art."
 )]
 pub struct Cli {
     /// A headless command instead of the app.
@@ -36,14 +36,15 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Voxelize glTF/GLB models headless: stats (optionally JSON lines), .vox and glTF export.
+    // `voxel-art voxelize …`, the core's headless voxelizer (a plain comment: a doc comment here would
+    // replace the help text the core gives it).
     Voxelize(voxel_core::cli::VoxelizeArgs),
 }
 
 impl Cli {
     /// Parses `args` (the first is the program name); on `--help`, `--version` or a usage error prints it and
     /// returns the exit status to use (0, or 2 for an error).
-    pub fn parse_from(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
+    pub fn parse_args(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
         Self::try_parse_from(args).map_err(|e| {
             let _ = e.print();
             if e.use_stderr() { 2 } else { 0 }

@@ -95,7 +95,7 @@ impl Plugin for AppPlugin {
 /// Runs the command line `args` (the first is the program name): the app, or `voxel-art voxelize`; returns
 /// the exit status.
 pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
-    match config::Cli::parse_from(args) {
+    match config::Cli::parse_args(args) {
         Ok(config::Cli { command: Some(config::Command::Voxelize(voxelize)), .. }) => {
             voxel_core::cli::execute(&voxelize)
         }

@@ -127,7 +127,7 @@ struct Report<'a> {
 }
 
 /// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
-#[derive(Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Default, serde::Serialize)]
 pub(crate) struct Exported {
     /// The .vox written.
     #[serde(skip_serializing_if = "Option::is_none")]
