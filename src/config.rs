@@ -1,12 +1,12 @@
-//! The app's command line, `voxel-art [MODEL|FOLDER…] [--style S] [--export-dir DIR] [--screenshot out.png
-//! --frames N]`, and the starting configuration it becomes. [`AppArgs::configure`] is the one place that reads
-//! the parsed arguments: it inserts the starting resources the plugins read (no system sees the raw command
-//! line).
+//! The command line: `voxel-art [MODEL|FOLDER…] [--style S] [--export-dir DIR] [--screenshot out.png --frames
+//! N]` opens the app, `voxel-art voxelize FILE…` runs the core's headless voxelizer ([`Cli`]). The app's
+//! arguments become its starting configuration in [`AppArgs::configure`], the one place that reads them: it
+//! inserts the starting resources the plugins read (no system sees the raw command line).
 
 use std::path::PathBuf;
 
 use bevy::prelude::*;
-use clap::Parser;
+use clap::{Parser, Subcommand};
 
 use crate::export::ExportDir;
 use crate::input::PointerMode;
@@ -15,13 +15,45 @@ use crate::screenshot::ScreenshotPlugin;
 use crate::settings::Style;
 use crate::transition::{Assignment, TransitionSettings};
 
-/// Parsed command line of the app.
-#[derive(Parser, Clone, Debug, Default)]
+/// The whole command line: the app's arguments, or a subcommand.
+#[derive(Parser, Debug)]
 #[command(
     name = "voxel-art",
     version,
-    about = "Turns glTF/GLB models into animated voxel art.\n\nHeadless voxelizer: voxel-art voxelize --help"
+    propagate_version = true,
+    args_conflicts_with_subcommands = true,
+    about = "Turns glTF/GLB models into animated voxel art."
 )]
+pub struct Cli {
+    /// A headless command instead of the app.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// The app's arguments (without a subcommand).
+    #[command(flatten)]
+    pub app: AppArgs,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    // `voxel-art voxelize …`, the core's headless voxelizer (a plain comment: a doc comment here would
+    // replace the help text the core gives it).
+    Voxelize(voxel_core::cli::VoxelizeArgs),
+}
+
+impl Cli {
+    /// Parses `args` (the first is the program name); on `--help`, `--version` or a usage error prints it and
+    /// returns the exit status to use (0, or 2 for an error).
+    pub fn parse_args(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
+        Self::try_parse_from(args).map_err(|e| {
+            let _ = e.print();
+            if e.use_stderr() { 2 } else { 0 }
+        })
+    }
+}
+
+/// Parsed command line of the app.
+#[derive(clap::Args, Clone, Debug, Default)]
 pub struct AppArgs {
     /// Extra models (.glb/.gltf) or folders of models to add to the shipped ones.
     pub models: Vec<PathBuf>,
@@ -58,14 +90,6 @@ pub struct AppArgs {
 }
 
 impl AppArgs {
-    /// Parses `args`; on `--help` or a usage error prints it and returns the exit status to use.
-    pub fn parse_from(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
-        Self::try_parse_from(args).map_err(|e| {
-            let _ = e.print();
-            if e.use_stderr() { 2 } else { 0 }
-        })
-    }
-
     /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
     /// after `StatesPlugin`), when the pointer counts, the voxel-to-cell matching and the exports folder (call
     /// before the plugins that read them are added).

@@ -92,12 +92,20 @@ impl Plugin for AppPlugin {
     }
 }
 
-/// Runs the app with command-line `args` (the first is the program name); returns the exit status.
+/// Runs the command line `args` (the first is the program name): the app, or `voxel-art voxelize`; returns
+/// the exit status.
 pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
-    let args = match config::AppArgs::parse_from(args) {
-        Ok(a) => a,
-        Err(code) => return code,
-    };
+    match config::Cli::parse_args(args) {
+        Ok(config::Cli { command: Some(config::Command::Voxelize(voxelize)), .. }) => {
+            voxel_core::cli::execute(&voxelize)
+        }
+        Ok(config::Cli { command: None, app }) => run_app(app),
+        Err(code) => code,
+    }
+}
+
+/// Runs the app until its window closes; returns the exit status.
+fn run_app(args: config::AppArgs) -> i32 {
     let exit = App::new().add_plugins(AppPlugin { args }).run();
     match exit {
         AppExit::Success => 0,

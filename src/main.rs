@@ -1,9 +1,6 @@
-//! `voxel-art`: with no subcommand, the app; `voxel-art voxelize …`, the headless voxelizer.
+//! `voxel-art`: with no subcommand, the app; `voxel-art voxelize …`, the headless voxelizer (see
+//! [`voxel_art::config::Cli`]).
 
 fn main() {
-    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    if args.get(1).is_some_and(|a| a == "voxelize") {
-        std::process::exit(voxel_core::cli::run(args.into_iter().skip(1)));
-    }
-    std::process::exit(voxel_art::run(args));
+    std::process::exit(voxel_art::run(std::env::args_os().collect()));
 }

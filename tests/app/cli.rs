@@ -12,7 +12,7 @@ fn write_cube_glb(dir: &std::path::Path) -> std::path::PathBuf {
     let cube = voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]);
     let soup = voxel_core::TriangleSoup::from_mesh(&cube, [1.0; 4]);
     let path = dir.join("cube.glb");
-    std::fs::write(&path, voxel_core::glb::soup_to_glb(&soup)).unwrap();
+    std::fs::write(&path, voxel_core::glb::soup_to_glb(&soup).unwrap()).unwrap();
     path
 }
 

@@ -86,10 +86,10 @@ fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
 
 /// The models of the corpus folder and its subfolders, sorted.
 fn corpus(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(&[dir.to_path_buf()]);
+    let mut files: Vec<PathBuf> = voxel_core::inputs::expand_inputs(&[dir.to_path_buf()]);
     for sub in std::fs::read_dir(dir).into_iter().flatten().flatten() {
         if sub.path().is_dir() {
-            files.extend(voxel_core::cli::expand_inputs(&[sub.path()]));
+            files.extend(voxel_core::inputs::expand_inputs(&[sub.path()]));
         }
     }
     files.sort();

@@ -123,7 +123,7 @@ fn main() {
     for (name, make) in models {
         let path = out.join(format!("{name}.glb"));
         let soup = make();
-        std::fs::write(&path, soup_to_glb(&soup)).expect("write model");
+        std::fs::write(&path, soup_to_glb(&soup).expect("encode model")).expect("write model");
         println!("{} ({} triangles, {} parts)", path.display(), soup.triangle_count(), soup.parts.len());
     }
 }

@@ -1,54 +1,29 @@
-//! The headless `voxel-art voxelize` command: batch voxelization with stats and .vox export.
+//! The headless `voxel-art voxelize` command: batch voxelization with stats and .vox or glTF export.
 
 use std::ffi::OsString;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use clap::{Parser, ValueEnum};
+use clap::Parser;
 
 use crate::error::{Result, VoxelError};
 use crate::export::{self, ExportOptions, Format, MeshStats, Written};
 use crate::grid::GridSize;
+use crate::inputs::expand_inputs;
 use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
 
-/// Interior mode on the command line.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum FillArg {
-    Winding,
-    Parity,
-    Flood,
-    None,
-}
-
-/// Shell mode on the command line.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum ShellArg {
-    Auto,
-    All,
-    None,
-}
-
-/// Export format on the command line.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum FormatArg {
-    Vox,
-    Glb,
-    Gltf,
-}
-
-/// Parity implementation on the command line.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum MethodArg {
-    Fast,
-    Bvh,
-    Reference,
-}
-
-/// Voxelize glTF/GLB models headless: stats (optionally JSON lines) and MagicaVoxel export.
+/// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
+/// through [`run`].
 #[derive(Debug, Parser)]
-#[command(name = "voxel-art voxelize", bin_name = "voxel-art voxelize", version)]
-struct Args {
+#[command(
+    name = "voxel-art voxelize",
+    bin_name = "voxel-art voxelize",
+    version,
+    about = "Voxelize glTF/GLB models headless: stats (optionally JSON lines), .vox and glTF export",
+    long_about = None
+)]
+pub struct VoxelizeArgs {
     /// Model files (.glb/.gltf) or folders holding them.
     #[arg(required = true)]
     files: Vec<PathBuf>,
@@ -66,10 +41,10 @@ struct Args {
     cell_height: f32,
     /// How the interior is found.
     #[arg(long, value_enum, default_value = "winding")]
-    fill: FillArg,
+    fill: FillMode,
     /// Which surface cells join the solid.
     #[arg(long, value_enum, default_value = "auto")]
-    shell: ShellArg,
+    shell: ShellMode,
     /// Keep only voxels with an empty face neighbour.
     #[arg(long)]
     hollow: bool,
@@ -78,15 +53,15 @@ struct Args {
     pastel: bool,
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
-    method: MethodArg,
+    method: Method,
     /// Export: a file for one input (.glb, .gltf + .bin, else MagicaVoxel .vox, by extension), a folder
     /// (one <name>.<format> each) for several.
     #[arg(long, short = 'o')]
     out: Option<PathBuf>,
-    /// Export format, overriding the --out extension (the format of a folder's files; default vox). Not
-    /// with --animation, whose frames are .vox.
-    #[arg(long, value_enum, conflicts_with = "animation")]
-    format: Option<FormatArg>,
+    /// Export format, overriding the --out extension (the format of a folder's files, --animation's frames
+    /// included; default vox).
+    #[arg(long, value_enum)]
+    format: Option<Format>,
     /// Print one JSON object per line per file instead of a readable summary.
     #[arg(long)]
     json: bool,
@@ -94,7 +69,7 @@ struct Args {
     #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
     max_cells: u64,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
-    /// --out is then a folder of <name>-<frame>.vox files.
+    /// --out is then a folder of <name>-<frame>.<format> files.
     #[arg(long)]
     animation: Option<String>,
     /// Frames per second of --animation.
@@ -105,7 +80,7 @@ struct Args {
     duration: Option<f32>,
 }
 
-impl Args {
+impl VoxelizeArgs {
     fn options(&self) -> VoxelizeOptions {
         VoxelizeOptions {
             model_size: self.model_size,
@@ -115,23 +90,10 @@ impl Args {
                 (None, None) => GridSize::default(),
             },
             cell_height_ratio: self.cell_height,
-            fill: match self.fill {
-                FillArg::Winding => FillMode::Winding,
-                FillArg::Parity => FillMode::Parity,
-                FillArg::Flood => FillMode::Flood,
-                FillArg::None => FillMode::None,
-            },
-            shell: match self.shell {
-                ShellArg::Auto => ShellMode::Auto,
-                ShellArg::All => ShellMode::All,
-                ShellArg::None => ShellMode::None,
-            },
+            fill: self.fill,
+            shell: self.shell,
             hollow: self.hollow,
-            method: match self.method {
-                MethodArg::Fast => Method::Fast,
-                MethodArg::Bvh => Method::Bvh,
-                MethodArg::Reference => Method::Reference,
-            },
+            method: self.method,
             pastel: self.pastel,
             max_cells: self.max_cells,
         }
@@ -140,9 +102,7 @@ impl Args {
     /// The export format: --format, else the extension of a single output file, else .vox.
     fn format(&self, several: bool) -> Format {
         match (self.format, &self.out) {
-            (Some(FormatArg::Vox), _) => Format::Vox,
-            (Some(FormatArg::Glb), _) => Format::Glb,
-            (Some(FormatArg::Gltf), _) => Format::Gltf,
+            (Some(format), _) => format,
             (None, Some(out)) if !several => Format::of_path(out),
             (None, _) => Format::Vox,
         }
@@ -162,6 +122,14 @@ struct Report<'a> {
     output_voxels: usize,
     load_ms: f64,
     voxelize_ms: f64,
+    #[serde(flatten)]
+    exported: Exported,
+}
+
+/// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
+#[derive(Debug, Default, serde::Serialize)]
+pub(crate) struct Exported {
+    /// The .vox written.
     #[serde(skip_serializing_if = "Option::is_none")]
     vox: Option<String>,
     /// The .glb or .gltf written.
@@ -172,34 +140,30 @@ struct Report<'a> {
     mesh: Option<MeshStats>,
 }
 
-/// Whether a path names a glTF model.
-pub fn is_model_file(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"))
-}
-
-/// Expands folders into the model files they hold (sorted); files are kept as given.
-pub fn expand_inputs(inputs: &[PathBuf]) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for input in inputs {
-        if input.is_dir() {
-            let mut found: Vec<PathBuf> = std::fs::read_dir(input)
-                .map(|rd| {
-                    rd.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.is_file() && is_model_file(p)).collect()
-                })
-                .unwrap_or_default();
-            found.sort();
-            out.extend(found);
-        } else {
-            out.push(input.clone());
+impl Exported {
+    /// What writing `path` wrote.
+    pub(crate) fn new(path: &Path, written: Written) -> Self {
+        let path = Some(path.display().to_string());
+        match written {
+            Written::Vox(_) => Self { vox: path, ..Self::default() },
+            Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
         }
     }
-    out
+
+    /// The end of a readable line: `, wrote <path>` (with the mesh's figures for a glTF), or nothing.
+    pub(crate) fn summary(&self) -> String {
+        match (self.vox.as_ref().or(self.gltf.as_ref()), self.mesh) {
+            (Some(p), Some(m)) => {
+                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
+            }
+            (Some(p), None) => format!(", wrote {p}"),
+            (None, _) => String::new(),
+        }
+    }
 }
 
 /// The name of an input model: its file stem.
-fn stem(input: &Path) -> String {
+pub(crate) fn stem(input: &Path) -> String {
     input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
 }
 
@@ -207,13 +171,14 @@ fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathB
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
-fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -> Result<String> {
+fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several: bool) -> Result<String> {
     if let Some(animation) = &args.animation {
         let request = crate::cli_animation::ClipRequest {
             animation,
             fps: args.fps,
             duration: args.duration,
             out: args.out.as_deref(),
+            format: args.format(true),
             json: args.json,
         };
         return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
@@ -224,7 +189,7 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
     let t1 = Instant::now();
     let model = voxelize(&soup, options)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
-    let written = match &args.out {
+    let exported = match &args.out {
         Some(out) => {
             if several {
                 std::fs::create_dir_all(out)
@@ -233,14 +198,9 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
             let format = args.format(several);
             let path = export_path(out, file, several, format);
             let written = export::write(&model, &path, format, &ExportOptions { name: stem(file) })?;
-            Some((path.display().to_string(), written))
+            Exported::new(&path, written)
         }
-        None => None,
-    };
-    let (vox, gltf, mesh) = match written {
-        Some((path, Written::Vox(_))) => (Some(path), None, None),
-        Some((path, Written::Mesh(stats))) => (None, Some(path), Some(stats)),
-        None => (None, None, None),
+        None => Exported::default(),
     };
     let s = model.stats;
     let name = file.display().to_string();
@@ -256,20 +216,12 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
             output_voxels: model.voxels.len(),
             load_ms,
             voxelize_ms,
-            vox,
-            gltf,
-            mesh,
+            exported,
         };
         serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
     } else {
         let [nx, ny, nz] = s.grid;
-        let written = match (vox.or(gltf), mesh) {
-            (Some(p), Some(m)) => {
-                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
-            }
-            (Some(p), None) => format!(", wrote {p}"),
-            (None, _) => String::new(),
-        };
+        let written = exported.summary();
         Ok(format!(
             "{name}: {} triangles -> {nx}x{ny}x{nz} grid, {} voxels ({} surface, {} visible, {} output), {} colours; load {load_ms:.1} ms, voxelize {voxelize_ms:.1} ms{written}",
             s.triangles,
@@ -282,16 +234,21 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
     }
 }
 
-/// Runs `voxel-art voxelize` with `args` (the first item is the program name). Returns the exit status:
-/// 0 when every file succeeded, 1 when any failed (after processing the others), 2 on bad usage.
+/// Parses `args` as `voxel-art voxelize` on its own (the first item is the program name) and runs it. Returns
+/// the exit status: 2 on bad usage (0 for `--help`), else that of [`execute`].
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
-    let args = match Args::try_parse_from(args) {
-        Ok(a) => a,
+    match VoxelizeArgs::try_parse_from(args) {
+        Ok(args) => execute(&args),
         Err(e) => {
             let _ = e.print();
-            return if e.use_stderr() { 2 } else { 0 };
+            if e.use_stderr() { 2 } else { 0 }
         }
-    };
+    }
+}
+
+/// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
+/// when any failed (each named on stderr as `error: <file>: <reason>`, after processing the others).
+pub fn execute(args: &VoxelizeArgs) -> i32 {
     let options = args.options();
     let files = expand_inputs(&args.files);
     if files.is_empty() {
@@ -308,8 +265,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, &args, &options, several)));
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {

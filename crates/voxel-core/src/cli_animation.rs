@@ -1,11 +1,14 @@
-//! `voxel-art voxelize FILE --animation <name|index|list> [--fps 12] [--duration S] [--out DIR] [--json]`:
-//! voxelizes a clip frame by frame in one grid fitted to all its poses, or lists the clips.
+//! `voxel-art voxelize FILE --animation <name|index|list> [--fps 12] [--duration S] [--out DIR [--format
+//! vox|glb|gltf]] [--json]`: voxelizes a clip frame by frame in one grid fitted to all its poses (one file
+//! per frame in DIR), or lists the clips.
 
 use std::path::Path;
 use std::time::Instant;
 
 use crate::anim::AnimatedModel;
+use crate::cli::{Exported, stem};
 use crate::error::{Result, VoxelError};
+use crate::export::{self, ExportOptions, Format};
 use crate::soup::TriangleSoup;
 use crate::voxelize::{VoxelizeOptions, voxelize_within};
 
@@ -21,8 +24,10 @@ pub struct ClipRequest<'a> {
     pub fps: f32,
     /// Seconds to voxelize; one clip length when `None`.
     pub duration: Option<f32>,
-    /// A folder for `<stem>-<frame>.vox` files.
+    /// A folder for `<stem>-<frame>.<format>` files.
     pub out: Option<&'a Path>,
+    /// The format of the frames' files.
+    pub format: Format,
     /// One JSON object per line instead of readable lines.
     pub json: bool,
 }
@@ -39,8 +44,8 @@ struct FrameReport<'a> {
     visible: usize,
     pose_ms: f64,
     voxelize_ms: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    vox: Option<String>,
+    #[serde(flatten)]
+    exported: Exported,
 }
 
 /// One clip's JSON line for `--animation list`.
@@ -76,7 +81,7 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
     if let Some(out) = request.out {
         std::fs::create_dir_all(out).map_err(|e| VoxelError::Export { path: out.to_owned(), reason: e.to_string() })?;
     }
-    let stem = file.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned());
+    let stem = stem(file);
     let bounds = model.clip_bounds(clip)?;
     let mut soup = TriangleSoup::default();
     let mut lines = Vec::with_capacity(frames);
@@ -88,13 +93,13 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
         let voxels = voxelize_within(&soup, options, bounds)?;
         let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
         let pose_ms = (t1 - t0).as_secs_f64() * 1e3;
-        let vox = match request.out {
+        let exported = match request.out {
             Some(out) => {
-                let path = out.join(format!("{stem}-{frame:04}.vox"));
-                crate::vox::write_vox(&voxels, &path)?;
-                Some(path.display().to_string())
+                let path = out.join(format!("{stem}-{frame:04}.{}", request.format.extension()));
+                let options = ExportOptions { name: format!("{stem}-{frame:04}") };
+                Exported::new(&path, export::write(&voxels, &path, request.format, &options)?)
             }
-            None => None,
+            None => Exported::default(),
         };
         let s = voxels.stats;
         lines.push(if request.json {
@@ -108,13 +113,15 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
                 visible: s.visible,
                 pose_ms,
                 voxelize_ms,
-                vox,
+                exported,
             })?
         } else {
-            let written = vox.map(|p| format!(", wrote {p}")).unwrap_or_default();
             format!(
-                "{name} [{}] frame {frame} t={time:.3} s: {} voxels ({} visible); pose {pose_ms:.2} ms, voxelize {voxelize_ms:.1} ms{written}",
-                info.name, s.voxels, s.visible
+                "{name} [{}] frame {frame} t={time:.3} s: {} voxels ({} visible); pose {pose_ms:.2} ms, voxelize {voxelize_ms:.1} ms{}",
+                info.name,
+                s.voxels,
+                s.visible,
+                exported.summary()
             )
         });
     }

@@ -1,6 +1,10 @@
 //! Writes a [`TriangleSoup`] as a binary glTF (.glb): one mesh, one primitive and material per part,
-//! flat normals, COLOR_0 where a part has vertex colours. Textures are not written.
+//! flat normals, COLOR_0 where a part has vertex colours. Textures are not written. [`pack`] is the one
+//! place the core makes the .glb container (the export writes through it too).
 
+use std::borrow::Cow;
+
+use crate::error::{Result, VoxelError};
 use crate::soup::TriangleSoup;
 
 /// Appends `values` as little-endian f32 and pads to 4 bytes (f32 is already aligned).
@@ -11,7 +15,7 @@ fn push_f32s(bin: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
 }
 
 /// Encodes `soup` as a .glb file.
-pub fn soup_to_glb(soup: &TriangleSoup) -> Vec<u8> {
+pub fn soup_to_glb(soup: &TriangleSoup) -> Result<Vec<u8>> {
     let mut bin = Vec::new();
     let mut views = Vec::new();
     let mut accessors = Vec::new();
@@ -81,34 +85,29 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Vec<u8> {
         "bufferViews": views,
         "accessors": accessors,
     });
-    pack(&doc, &bin)
+    let json = serde_json::to_vec(&doc).map_err(encode_error)?;
+    pack(&json, &bin)
 }
 
-/// Packs a glTF JSON document and its binary buffer into the .glb container (both chunks padded to 4 bytes).
-pub fn pack(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(doc).expect("JSON of plain values");
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let total = 12 + 8 + json.len() + bin_chunk;
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-    }
-    out
+/// Packs glTF JSON and its binary buffer into the .glb container with the gltf crate's writer (the JSON
+/// chunk padded with spaces, the BIN chunk, left out when empty, with zeros). A container over 4 GiB, which
+/// the format's 32-bit lengths cannot describe, is an error.
+pub fn pack(json: &[u8], bin: &[u8]) -> Result<Vec<u8>> {
+    let chunk = |bytes: &[u8]| 8 + bytes.len().next_multiple_of(4);
+    let length = 12 + chunk(json) + if bin.is_empty() { 0 } else { chunk(bin) };
+    // The writer computes the header's length itself (and would truncate it to 32 bits): only checked here.
+    let length = u32::try_from(length).map_err(|_| encode_error("over 4 GiB, the .glb limit"))?;
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header { magic: *b"glTF", version: 2, length },
+        json: Cow::Borrowed(json),
+        bin: (!bin.is_empty()).then_some(Cow::Borrowed(bin)),
+    };
+    glb.to_vec().map_err(encode_error)
+}
+
+/// The error of a glTF that cannot be encoded.
+pub(crate) fn encode_error(reason: impl std::fmt::Display) -> VoxelError {
+    VoxelError::Parameter(format!("cannot encode the glTF: {reason}"))
 }
 
 #[cfg(test)]
@@ -126,10 +125,25 @@ mod tests {
                 v.color = [0.5, 0.5, 1.0, 1.0];
             }
         }
-        let back = crate::import::load_slice(&soup_to_glb(&soup), None).unwrap();
+        let back = crate::import::load_slice(&soup_to_glb(&soup).unwrap(), None).unwrap();
         assert_eq!(back.triangle_count(), soup.triangle_count());
         assert_eq!(back.materials.len(), 2);
         assert_eq!(back.materials[0].base_color, [1.0, 0.0, 0.0, 1.0]);
         assert_eq!(back.vertices, soup.vertices);
+    }
+
+    #[test]
+    fn the_container_pads_both_chunks_and_leaves_out_an_empty_bin() {
+        let json = br#"{"asset":{"version":"2.0"}}"#;
+        let packed = pack(json, &[1, 2, 3]).unwrap();
+        // Header, JSON chunk (27 bytes padded to 28), BIN chunk (3 padded to 4).
+        assert_eq!(packed.len(), 12 + 8 + 28 + 8 + 4);
+        assert_eq!(packed[8..12], (packed.len() as u32).to_le_bytes());
+        let glb = gltf::binary::Glb::from_slice(&packed).unwrap();
+        assert_eq!(*glb.json, [&json[..], b" "].concat());
+        assert_eq!(glb.bin.as_deref(), Some(&[1, 2, 3, 0][..]));
+        let without_bin = pack(b"{}", &[]).unwrap();
+        assert_eq!(without_bin.len(), 12 + 8 + 4);
+        assert!(gltf::binary::Glb::from_slice(&without_bin).unwrap().bin.is_none());
     }
 }

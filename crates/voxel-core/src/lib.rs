@@ -3,11 +3,16 @@
 //! ```text
 //! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox export, stats)
 //! ```
-//! No rendering types here; deterministic whatever the thread count.
+//! No rendering types here; deterministic whatever the thread count. The `voxel-art voxelize` command line
+//! (modules `cli` and `cli_animation`, with clap and indicatif) is behind the `cli` feature, off by default.
+
+#![warn(missing_docs)]
 
 pub mod anim;
 pub mod bvh;
+#[cfg(feature = "cli")]
 pub mod cli;
+#[cfg(feature = "cli")]
 pub mod cli_animation;
 pub mod color;
 pub mod error;
@@ -17,6 +22,7 @@ pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
+pub mod inputs;
 mod orient;
 pub mod shapes;
 mod shell;

@@ -18,6 +18,7 @@ use crate::soup::TriangleSoup;
 
 /// How the inside of the model is found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum FillMode {
     /// Nonzero winding number per grid column: closed parts are oriented outwards (or kept as cavities)
     /// and overlapping parts stay solid; parts that cannot be oriented count by parity (see `fill`).
@@ -34,6 +35,7 @@ pub enum FillMode {
 
 /// Which surface-shell cells join the solid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum ShellMode {
     /// Only where the fill does not already represent the surface: thin parts and open sheets.
     #[default]
@@ -46,6 +48,7 @@ pub enum ShellMode {
 
 /// Which implementation computes the winding or parity fill (all give the same cells).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Method {
     /// Triangle-major rasterization of the column crossings.
     #[default]

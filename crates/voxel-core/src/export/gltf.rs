@@ -2,7 +2,6 @@
 //! with POSITION, NORMAL, linear COLOR_0 and indices, a plain white material, and one node whose transform
 //! undoes the normalization, so the export sits where the original model sat, at its scale.
 
-use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -214,16 +213,8 @@ fn document(model: &VoxelModel, options: &ExportOptions) -> Document {
 /// Encodes `model` as a binary glTF (.glb) in memory, with what it holds.
 pub fn to_glb(model: &VoxelModel, options: &ExportOptions) -> Result<(Vec<u8>, MeshStats)> {
     let Document { root, bin, mut stats } = document(model, options);
-    let failed = |e: &dyn std::fmt::Display| VoxelError::Parameter(format!("cannot encode the glTF: {e}"));
-    let json = root.to_vec().map_err(|e| failed(&e))?;
-    let length = 12 + 8 + json.len().next_multiple_of(4) + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let length = u32::try_from(length).map_err(|_| failed(&"over 4 GiB, the .glb limit"))?;
-    let glb = gltf::binary::Glb {
-        header: gltf::binary::Header { magic: *b"glTF", version: 2, length },
-        json: Cow::Owned(json),
-        bin: (!bin.is_empty()).then_some(Cow::Owned(bin)),
-    };
-    let bytes = glb.to_vec().map_err(|e| failed(&e))?;
+    let json = root.to_vec().map_err(crate::glb::encode_error)?;
+    let bytes = crate::glb::pack(&json, &bin)?;
     stats.bytes = bytes.len();
     Ok((bytes, stats))
 }

@@ -41,6 +41,7 @@ pub struct MeshStats {
 
 /// An export file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Format {
     /// MagicaVoxel.
     Vox,

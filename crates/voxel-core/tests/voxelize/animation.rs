@@ -9,7 +9,10 @@ use voxel_core::{
     voxelize_within,
 };
 
+#[cfg(feature = "cli")]
 use voxel_core::cli_animation::{ClipRequest, voxelize_clip};
+#[cfg(feature = "cli")]
+use voxel_core::export::Format;
 
 use crate::common::{at_resolution, glb, model};
 
@@ -417,6 +420,7 @@ fn the_milk_trucks_wheels_turn_rigidly_and_its_body_stays() {
 }
 
 /// Writes `bytes` to a fresh temporary folder as `name`; returns the folder.
+#[cfg(feature = "cli")]
 fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("voxel-core-anim-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -425,10 +429,21 @@ fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     dir
 }
 
+/// The names of the files in `dir`, sorted.
+#[cfg(feature = "cli")]
+fn file_names(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+#[cfg(feature = "cli")]
 fn run(args: &[&std::ffi::OsStr]) -> i32 {
     voxel_core::cli::run(std::iter::once("voxel-art voxelize".into()).chain(args.iter().map(|a| a.to_os_string())))
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn the_cli_writes_one_vox_per_frame_of_a_clip() {
     let dir = temp_model("cube.glb", &morph_cube(None));
@@ -445,9 +460,7 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
         out.as_os_str(),
     ]);
     assert_eq!(status, 0);
-    let mut written: Vec<String> =
-        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    written.sort();
+    let written = file_names(&out);
     assert_eq!(written, (0..8).map(|k| format!("cube-{k:04}.vox")).collect::<Vec<_>>());
     // The cube slides along x by 2 per second: frame 0 and frame 4 (t = 1) are different models.
     let first = dot_vox::load(out.join("cube-0000.vox").to_str().unwrap()).unwrap();
@@ -461,19 +474,82 @@ fn the_cli_writes_one_vox_per_frame_of_a_clip() {
     assert_eq!(run(&[file.as_os_str(), "--fps".as_ref(), "4".as_ref()]), 2);
     let still = temp_model(
         "still.glb",
-        &voxel_core::glb::soup_to_glb(voxel_core::load_slice(&morph_cube(None), None).as_ref().unwrap()),
+        &voxel_core::glb::soup_to_glb(voxel_core::load_slice(&morph_cube(None), None).as_ref().unwrap()).unwrap(),
     );
     assert_eq!(run(&[still.join("still.glb").as_os_str(), "--animation".as_ref(), "list".as_ref()]), 1);
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&still).unwrap();
 }
 
+#[cfg(feature = "cli")]
+#[test]
+fn glb_frames_import_back_with_each_frames_cells() {
+    let dir = temp_model("box.glb", &morph_cube(None));
+    let file = dir.join("box.glb");
+    let out = dir.join("frames");
+    // The clip spans x = 0..6 (the unit cube slides 4 along x and doubles its width from t = 1): 24 cells of
+    // 0.25 along it, so every face lies on a cell boundary.
+    let options = voxel_core::VoxelizeOptions { grid: voxel_core::GridSize::Resolution(24), ..Default::default() };
+    // 2 s at 4 frames per second: frames 0..8, moving 2 cells each.
+    let request =
+        ClipRequest { animation: "0", fps: 4.0, duration: None, out: Some(&out), format: Format::Glb, json: true };
+    let lines = voxelize_clip(&file, &request, &options).unwrap();
+    let written = file_names(&out);
+    assert_eq!(written, (0..8).map(|k| format!("box-{k:04}.glb")).collect::<Vec<_>>());
+    let (lo, hi) = load_animated_file(&file).unwrap().clip_bounds(0).unwrap();
+    assert_eq!((lo, hi), ([0.0; 3], [6.0, 1.0, 1.0]));
+    let cell = 0.25;
+    let mut counts = Vec::new();
+    for (k, line) in lines.iter().enumerate() {
+        let frame: Value = serde_json::from_str(line).unwrap();
+        let path = out.join(format!("box-{k:04}.glb"));
+        assert_eq!(frame["gltf"], path.display().to_string());
+        assert!(frame.get("vox").is_none(), "{frame}");
+        assert_eq!(frame["mesh"]["bytes"], std::fs::metadata(&path).unwrap().len(), "frame {k}");
+        assert_eq!(frame["mesh"]["quads"], 6, "frame {k}: a box of one colour is six rectangles");
+        // Re-voxelized at the export's own cell size (its longest side in cells), the mesh is the frame's cells.
+        let soup = voxel_core::load_file(&path).unwrap();
+        assert_eq!(soup.triangle_count(), 12);
+        let (a, b) = soup.bounds().unwrap();
+        let sides: Vec<u32> = (0..3).map(|i| ((b[i] - a[i]) / cell).round() as u32).collect();
+        let again = voxel_core::VoxelizeOptions {
+            grid: voxel_core::GridSize::Resolution(*sides.iter().max().unwrap()),
+            shell: voxel_core::ShellMode::None,
+            ..Default::default()
+        };
+        let back = voxelize(&soup, &again).unwrap();
+        assert_eq!(back.stats.voxels, sides.iter().product::<u32>() as usize, "frame {k}: {sides:?}");
+        assert_eq!(frame["voxels"], back.stats.voxels, "frame {k}");
+        counts.push(back.stats.voxels);
+    }
+    // 4 × 4 × 4 cells, then 8 × 4 × 4 from t = 1 (frame 4).
+    assert_eq!(counts, [64, 64, 64, 64, 128, 128, 128, 128]);
+    // From the command line: a .gltf and a .bin per frame, the frames of --duration.
+    let gltf = dir.join("gltf");
+    let args = ["-r", "24", "--animation", "0", "--fps", "4", "--format", "gltf", "--duration", "0.5", "--out"];
+    let status = run(&[&[file.as_os_str()], &args.map(std::ffi::OsStr::new)[..], &[gltf.as_os_str()]].concat());
+    assert_eq!(status, 0);
+    let written = file_names(&gltf);
+    assert_eq!(written, ["box-0000.bin", "box-0000.gltf", "box-0001.bin", "box-0001.gltf"]);
+    let first = voxel_core::load_file(&gltf.join("box-0000.gltf")).unwrap();
+    assert_eq!(first.vertices, voxel_core::load_file(&out.join("box-0000.glb")).unwrap().vertices);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(feature = "cli")]
 #[test]
 fn the_cli_reports_every_frame_as_json_and_names_bad_requests() {
     let dir = temp_model("slide.glb", &morph_cube(None));
     let file = dir.join("slide.glb");
     let options = voxel_core::VoxelizeOptions::default();
-    let request = ClipRequest { animation: "animation 0", fps: 2.0, duration: Some(3.0), out: None, json: true };
+    let request = ClipRequest {
+        animation: "animation 0",
+        fps: 2.0,
+        duration: Some(3.0),
+        out: None,
+        format: Format::Vox,
+        json: true,
+    };
     let lines = voxelize_clip(&file, &request, &options).unwrap();
     assert_eq!(lines.len(), 6);
     let frames: Vec<Value> = lines.iter().map(|l| serde_json::from_str(l).unwrap()).collect();

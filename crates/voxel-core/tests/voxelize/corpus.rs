@@ -190,7 +190,7 @@ fn every_file_of_the_corpus_voxelizes() {
     let Some(dir) = models_dir() else { return };
     let mut folders = vec![dir.clone()];
     folders.extend(std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()));
-    let files = voxel_core::cli::expand_inputs(&folders);
+    let files = voxel_core::inputs::expand_inputs(&folders);
     // The 18 models of SOURCES.md, the three compressed ones among them.
     assert!(files.len() >= 18, "only {} model files in {}", files.len(), dir.display());
     for file in &files {

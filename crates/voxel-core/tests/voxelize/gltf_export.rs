@@ -114,13 +114,14 @@ fn generated_shapes_round_trip_through_glb() {
     }
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn the_command_line_writes_glb_and_gltf_by_extension_and_folders_by_format() {
     let dir = std::env::temp_dir().join(format!("voxel-core-cli-gltf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let input = dir.join("plate.glb");
     let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [4.0, 1.0, 2.0]), [0.2, 0.4, 0.6, 1.0]);
-    std::fs::write(&input, voxel_core::glb::soup_to_glb(&soup)).unwrap();
+    std::fs::write(&input, voxel_core::glb::soup_to_glb(&soup).unwrap()).unwrap();
     let run = |args: &[&std::path::Path]| {
         let args = ["voxel-art voxelize".as_ref()].into_iter().chain(args.iter().map(|p| p.as_os_str()));
         voxel_core::cli::run(args.map(std::ffi::OsString::from))
