@@ -18,7 +18,7 @@ use crate::instancing::{
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
 use crate::schedule::AppSystems;
-use crate::settings::VoxelSettings;
+use crate::settings::{SettingDrag, VoxelSettings};
 
 /// The article's timings (all editable in the panel).
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
@@ -62,6 +62,24 @@ impl Default for TransitionSettings {
             spin_duration: 1.2,
             count_duration: 0.4,
             assignment: Assignment::Morton,
+        }
+    }
+}
+
+impl TransitionSettings {
+    /// The same matching with every delay and duration zero and no spin: the voxels land on their cells in the
+    /// frame the transition starts. Used while a voxelization setting is dragged, so the live grid shows at once.
+    pub fn instant(&self) -> Self {
+        Self {
+            max_delay: 0.0,
+            base_duration: 0.0,
+            extra_duration: 0.0,
+            color_duration: 0.0,
+            color_delay_factor: 0.0,
+            spin_angle: 0.0,
+            spin_duration: 0.0,
+            count_duration: 0.0,
+            ..self.clone()
         }
     }
 }
@@ -306,7 +324,8 @@ pub fn plan(
 }
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
-/// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked.
+/// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked. While a
+/// voxelization setting is dragged the transition is instant: `step`, next in the chain, lands every voxel.
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
@@ -317,6 +336,7 @@ fn start(
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
+    drag: Res<SettingDrag>,
     voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
     mut last_look: Local<Option<(f32, bool)>>,
 ) {
@@ -329,6 +349,7 @@ fn start(
         return;
     }
     *last_look = Some(look);
+    let transition = if drag.0 { transition.instant() } else { transition.clone() };
     let new = layout(model, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
     let unturn = active.turn().inverse();
