@@ -206,14 +206,9 @@ pub struct ActiveTransition {
 }
 
 impl ActiveTransition {
-    /// The cloud's angle about y now.
-    pub fn angle(&self) -> f32 {
-        self.angle
-    }
-
     /// The model's rotation now: the cloud's, which voxel transforms are composed with.
     pub fn turn(&self) -> Quat {
-        Quat::from_rotation_y(self.angle())
+        Quat::from_rotation_y(self.angle)
     }
 }
 
