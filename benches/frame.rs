@@ -1,7 +1,8 @@
 //! `cargo bench --bench frame`: CPU time per frame of the app's systems (no GPU) with 100k voxels: static,
 //! with every voxel's colour changing every frame, mid-morph (every voxel tweening) and with the cursor over
-//! the model (repel); and one falling-pile physics step of 20k voxels. Mean and median.
-//! `cargo bench --bench frame -- pile` runs only the pile (likewise static, recolour, morph, repel).
+//! the model (repel); and one falling-pile physics step of 20k voxels. Mean and median. And the live grid
+//! slider: the latency from a grid change to the model on screen's new voxels on their cells.
+//! `cargo bench --bench frame -- pile` runs only the pile (likewise static, recolour, morph, repel, slider).
 
 use std::time::Instant;
 
@@ -83,7 +84,7 @@ fn measure(app: &mut App, warmup: usize, frames: usize) -> (f64, f64) {
     (mean, times[times.len() / 2])
 }
 
-/// Whether the scenario named `name` (static, recolour, morph, repel, pile) runs: all of them, or the one the
+/// Whether the scenario named `name` (static, recolour, morph, repel, pile, slider) runs: all of them, or the one the
 /// first non-flag argument names (`cargo bench --bench frame -- pile`).
 fn wanted(name: &str) -> bool {
     std::env::args().skip(1).find(|a| !a.starts_with('-')).is_none_or(|filter| name.contains(&filter))
@@ -92,6 +93,9 @@ fn wanted(name: &str) -> bool {
 fn main() {
     if wanted("pile") {
         pile_step();
+    }
+    if wanted("slider") {
+        slider_sweeps();
     }
     if !["static", "recolour", "morph", "repel"].into_iter().any(wanted) {
         return;
@@ -179,5 +183,90 @@ fn pile_step() {
          (then {asleep} asleep, top speed {:.3}, deepest overlap {:.3} of a cell)",
         pile.max_speed(),
         pile.max_overlap(cell)
+    );
+}
+
+/// Whether the model on screen is the current entry's voxelization of the latest settings with every voxel on
+/// its cell (no tween left, no transition running).
+fn current_placed(app: &mut App) -> bool {
+    let latest = app.world().resource::<voxel_art::voxelize::VoxelizeGeneration>().0;
+    let library = app.world().resource::<ModelLibrary>();
+    let Some(entry) = library.current_entry() else { return false };
+    let fresh = entry.voxels_generation == Some(latest)
+        && entry.voxels.as_ref().map(|h| h.id()) == app.world().resource::<VoxelPool>().shown;
+    let mut tweens = app.world_mut().query::<&voxel_art::transition::VoxelTween>();
+    fresh && tweens.iter(app.world()).next().is_none() && app.world().resource::<ActiveTransition>().running.is_none()
+}
+
+/// Steps the app (a quarter of a millisecond apart, as frames waiting on the GPU would leave the cores to the
+/// voxelizer) until `done`; panics after a minute.
+fn update_until(app: &mut App, mut done: impl FnMut(&mut App) -> bool) {
+    let start = Instant::now();
+    while !done(app) {
+        assert!(start.elapsed().as_secs() < 60, "the app never got there");
+        app.update();
+        std::thread::sleep(std::time::Duration::from_micros(250));
+    }
+}
+
+/// Drags the grid slider through `grids`, one value a frame: for each, the milliseconds from the change to the
+/// model on screen's new voxels on their cells; then releases it and waits until every model is redone.
+fn drag_through(app: &mut App, grids: &[f32]) -> Vec<f64> {
+    let latencies = grids
+        .iter()
+        .map(|&grid| {
+            app.world_mut().resource_mut::<voxel_art::settings::SettingDrag>().0 = true;
+            app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().grid_size = grid;
+            let t = Instant::now();
+            app.update();
+            update_until(app, current_placed);
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    app.world_mut().resource_mut::<voxel_art::settings::SettingDrag>().0 = false;
+    let latest = app.world().resource::<voxel_art::voxelize::VoxelizeGeneration>().0;
+    update_until(app, |app| {
+        app.world().resource::<ModelLibrary>().entries.iter().all(|e| e.voxels_generation == Some(latest))
+    });
+    latencies
+}
+
+/// The median and the 90th percentile.
+fn median_p90(values: &[f64]) -> (f64, f64) {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    (sorted[sorted.len() / 2], sorted[(sorted.len() * 9).div_ceil(10) - 1])
+}
+
+/// The live grid slider with the six shipped models loaded, each in turn on screen: the slider dragged from 0.12
+/// to 0.5 over 60 frames, then 60 frames back and forth around the article's default grid (0.24 ± 0.02).
+fn slider_sweeps() {
+    let mut app = voxel_art::headless::headless_app(&voxel_art::config::AppArgs::default());
+    update_until(&mut app, |app| {
+        let library = app.world().resource::<ModelLibrary>();
+        !library.entries.is_empty() && library.entries.iter().all(|e| e.status == ModelStatus::Ready)
+    });
+    let sweep: Vec<f32> = (0..60).map(|k| 0.12 + 0.38 * k as f32 / 59.0).collect();
+    let around_default: Vec<f32> = (0..60).map(|k| 0.22 + 0.04 * (k % 5) as f32 / 4.0).collect();
+    let names: Vec<String> = app.world().resource::<ModelLibrary>().entries.iter().map(|e| e.name.clone()).collect();
+    let (mut all_sweep, mut all_default) = (Vec::new(), Vec::new());
+    for (i, name) in names.iter().enumerate() {
+        app.world_mut().write_message(voxel_art::library::LibraryRequest::Select(i));
+        update_until(&mut app, |app| current_placed(app) && settled(app));
+        let swept = drag_through(&mut app, &sweep);
+        let near = drag_through(&mut app, &around_default);
+        let ((sm, s90), (dm, d90)) = (median_p90(&swept), median_p90(&near));
+        println!(
+            "slider, {name} on screen: 0.12 → 0.5 median {sm:.2} ms, p90 {s90:.2} ms; around 0.24 median {dm:.2} ms, \
+             p90 {d90:.2} ms"
+        );
+        let frames: Vec<String> = swept.iter().map(|t| format!("{t:.1}")).collect();
+        println!("  per frame (ms): {}", frames.join(" "));
+        all_sweep.extend(swept);
+        all_default.extend(near);
+    }
+    let ((sm, s90), (dm, d90)) = (median_p90(&all_sweep), median_p90(&all_default));
+    println!(
+        "slider, all six: 0.12 → 0.5 median {sm:.2} ms, p90 {s90:.2} ms; around 0.24 median {dm:.2} ms, p90 {d90:.2} ms"
     );
 }

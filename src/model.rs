@@ -36,7 +36,7 @@ impl VoxelModelAsset {
 pub enum ModelStatus {
     /// The core's importer is reading the file.
     Loading,
-    /// Loaded; a voxelization task runs.
+    /// Loaded; a voxelization task runs (or, for a model not on screen, waits for a slider drag to end).
     Voxelizing,
     /// Voxels are available.
     Ready,

@@ -118,6 +118,12 @@ impl Default for RepelSettings {
     }
 }
 
+/// Whether a voxelization setting is being dragged (the panel's grid slider): UI state the panel sets. While
+/// it is, only the model on screen is re-voxelized, on every change, and its voxels are placed on their cells at
+/// once (no morph); the other models follow, with the last settings, when the drag ends.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SettingDrag(pub bool);
+
 /// Whether the side panel shows (H toggles): UI state, not a setting of the voxels.
 #[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PanelOpen(pub bool);
@@ -131,6 +137,7 @@ impl Default for PanelOpen {
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<RepelSettings>();
     app.init_resource::<PanelOpen>();
+    app.init_resource::<SettingDrag>();
     app.init_resource::<VoxelSettings>();
     // The starting style may have been set by the command line already (`AppArgs::configure`).
     if !app.world().contains_resource::<State<Style>>() {

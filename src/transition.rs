@@ -1,15 +1,22 @@
 //! Morphs between models: every voxel flies springily from where it is to its cell in the next model
 //! (the article's GSAP timings), colours flip after a random delay, the model spins and the visible count
-//! follows. Per-voxel tweens are [`VoxelTween`] components stepped by one parallel system (bevy_tweening's
-//! single-threaded, boxed-closure stepping is about 3× slower at 100k voxels). The spin is computed in the same
-//! step, so voxels and the cloud's frame always agree.
+//! follows.
+//!
+//! The two model-level animations, the spin and the visible count, are bevy_tweening `TweenAnim`s on
+//! [`ActiveTransition`]. The per-voxel flights are not: bevy_tweening 0.16 steps every `TweenAnim` in one
+//! exclusive, single-threaded system through boxed closures, measured at 14.6 ms a frame for 100k per-voxel
+//! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores). So
+//! each flying voxel carries a [`VoxelTween`], stepped by one `par_iter_mut` system right after the model-level
+//! tweens, which composes the spin into every voxel's transform: voxels and the cloud's frame always agree.
 
 use std::f32::consts::PI;
+use std::time::Duration;
 
 use bevy::ecs::system::ParallelCommands;
 use bevy::math::Mat3A;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
+use bevy_tweening::{AnimTarget, AnimationSystem, Lens, Tween, TweenAnim, TweeningPlugin};
 
 use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color,
@@ -18,7 +25,7 @@ use crate::instancing::{
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
 use crate::schedule::AppSystems;
-use crate::settings::VoxelSettings;
+use crate::settings::{SettingDrag, VoxelSettings};
 
 /// The article's timings (all editable in the panel).
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
@@ -66,6 +73,24 @@ impl Default for TransitionSettings {
     }
 }
 
+impl TransitionSettings {
+    /// The same matching with every delay and duration zero and no spin: the voxels land on their cells in the
+    /// frame the transition starts. Used while a voxelization setting is dragged, so the live grid shows at once.
+    pub fn instant(&self) -> Self {
+        Self {
+            max_delay: 0.0,
+            base_duration: 0.0,
+            extra_duration: 0.0,
+            color_duration: 0.0,
+            color_delay_factor: 0.0,
+            spin_angle: 0.0,
+            spin_duration: 0.0,
+            count_duration: 0.0,
+            ..self.clone()
+        }
+    }
+}
+
 /// How the voxels of the pool are matched to the cells of the next model.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect, clap::ValueEnum)]
 pub enum Assignment {
@@ -109,10 +134,8 @@ pub struct VoxelTween {
     pub color_delay: f32,
     /// Seconds the colour change takes.
     pub color_duration: f32,
-    /// Visible from this time on (`None`: visible throughout).
-    pub show_at: Option<f32>,
-    /// Hidden from this time on (`None`: never hidden).
-    pub hide_at: Option<f32>,
+    /// Its visibility follows the visible-count tween until then (0 for a voxel that shows throughout).
+    pub count_end: f32,
     /// Seconds since the transition started.
     pub elapsed: f32,
     /// Back-out overshoot.
@@ -124,11 +147,7 @@ pub struct VoxelTween {
 impl VoxelTween {
     /// When every part of the tween is over.
     pub fn end(&self) -> f32 {
-        (self.delay + self.duration)
-            .max(self.spin_end)
-            .max(self.color_delay + self.color_duration)
-            .max(self.show_at.unwrap_or(0.0))
-            .max(self.hide_at.unwrap_or(0.0))
+        (self.delay + self.duration).max(self.spin_end).max(self.color_delay + self.color_duration).max(self.count_end)
     }
 
     /// Position and scale at the tween's current time.
@@ -145,11 +164,6 @@ impl VoxelTween {
             (f32::from(self.color_from[c]) + (f32::from(self.color_to[c]) - f32::from(self.color_from[c])) * t).round()
                 as u8
         })
-    }
-
-    /// Whether the voxel shows at the tween's current time.
-    pub fn visible(&self) -> bool {
-        self.show_at.is_none_or(|s| self.elapsed >= s) && self.hide_at.is_none_or(|h| self.elapsed < h)
     }
 }
 
@@ -184,22 +198,77 @@ pub struct ActiveTransition {
     pub running: Option<(AssetId<VoxelModelAsset>, f32)>,
     /// Seconds since the transition started (scaled by the speed setting).
     pub elapsed: f32,
-    /// The spin: the cloud's angle about y at the start and at the end.
-    pub spin: (f32, f32),
-    /// Seconds the spin takes.
-    pub spin_duration: f32,
+    /// The cloud's angle about y (the spin tween turns it, quadratic-out).
+    pub angle: f32,
+    /// How many of the pool's slots show: slot i shows while i < `shown` (the visible-count tween moves it
+    /// linearly from the old model's count to the new one's).
+    pub shown: f32,
 }
 
 impl ActiveTransition {
-    /// The cloud's angle about y now (quadratic-out from the start angle to the end angle).
-    pub fn angle(&self) -> f32 {
-        let t = (self.elapsed / self.spin_duration.max(1e-6)).clamp(0.0, 1.0);
-        self.spin.0 + (self.spin.1 - self.spin.0) * t * (2.0 - t)
-    }
-
     /// The model's rotation now: the cloud's, which voxel transforms are composed with.
     pub fn turn(&self) -> Quat {
-        Quat::from_rotation_y(self.angle())
+        Quat::from_rotation_y(self.angle)
+    }
+}
+
+/// A model-level animation of the transition: one bevy_tweening `TweenAnim` on [`ActiveTransition`], despawned
+/// when the next transition starts.
+#[derive(Component, Debug)]
+pub struct ModelTween;
+
+/// What a model-level tween moves: one field of [`ActiveTransition`] from one value to another.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ModelLens {
+    /// The cloud's angle about y (radians).
+    Spin { from: f32, to: f32 },
+    /// The visible voxel count.
+    Count { from: f32, to: f32 },
+}
+
+impl ModelLens {
+    /// Sets the field at `ratio` (0 at the start, 1 at the end, after easing), landing exactly on the end value.
+    fn apply(self, active: &mut ActiveTransition, ratio: f32) {
+        let lerp = |from: f32, to: f32| from * (1.0 - ratio) + to * ratio;
+        match self {
+            ModelLens::Spin { from, to } => active.angle = lerp(from, to),
+            ModelLens::Count { from, to } => active.shown = lerp(from, to),
+        }
+    }
+}
+
+impl Lens<ActiveTransition> for ModelLens {
+    fn lerp(&mut self, mut target: Mut<'_, ActiveTransition>, ratio: f32) {
+        self.apply(&mut target, ratio);
+    }
+}
+
+/// Starts a model-level tween over `seconds` of transition time (`pace` scales it by the speed setting, as the
+/// voxels' tweens are); with no time to take, the field lands at once.
+fn spawn_model_tween(
+    commands: &mut Commands,
+    active: &mut ActiveTransition,
+    ease: EaseFunction,
+    seconds: f32,
+    lens: ModelLens,
+) {
+    match Duration::try_from_secs_f32(seconds) {
+        Ok(duration) if !duration.is_zero() => {
+            commands.spawn((
+                Name::new("model tween"),
+                ModelTween,
+                TweenAnim::new(Tween::new(ease, duration, lens)),
+                AnimTarget::resource::<ActiveTransition>(),
+            ));
+        }
+        _ => lens.apply(active, 1.0),
+    }
+}
+
+/// The model-level tweens run at the speed setting, as the voxels' do.
+fn pace(settings: Res<VoxelSettings>, mut tweens: Query<&mut TweenAnim, With<ModelTween>>) {
+    for mut tween in &mut tweens {
+        tween.speed = f64::from(settings.speed);
     }
 }
 
@@ -261,7 +330,7 @@ pub fn plan(
     let delay = settings.max_delay * rng.f32();
     let color_delay = settings.color_delay_factor * rng.f32() * duration;
     let (mut from, mut from_scale, mut color_from, _) = now;
-    let (to, to_scale, color_to, part, show_at, hide_at);
+    let (to, to_scale, color_to, part);
     if i < new_count {
         (to, to_scale, color_to, part) = (new[i].position, new[i].scale, new[i].color, new[i].part);
         if i >= old_count {
@@ -270,20 +339,14 @@ pub fn plan(
             if let Some(source) = (!old.is_empty()).then(|| old[rng.below(old.len())]) {
                 (from, from_scale, color_from) = (source.0, source.1, source.2);
             }
-            let ratio = (i - old_count) as f32 / (new_count - old_count) as f32;
-            show_at = Some(settings.count_duration * ratio);
-        } else {
-            show_at = None;
         }
-        hide_at = None;
     } else {
         // A surplus voxel: it flies into a random occupied cell and hides as the visible count shrinks.
         let target = new[rng.below(new_count)];
         (to, to_scale, color_to, part) = (target.position, target.scale, target.color, target.part);
-        show_at = None;
-        let ratio = (old_count - i) as f32 / (old_count - new_count) as f32;
-        hide_at = Some(settings.count_duration * ratio);
     }
+    // Joining and surplus voxels show or hide as the visible count passes their slot.
+    let count_end = if i >= old_count.min(new_count) { settings.count_duration } else { 0.0 };
     let home = VoxelHome { position: to, scale: to_scale, part };
     let tween = VoxelTween {
         from,
@@ -296,8 +359,7 @@ pub fn plan(
         color_to,
         color_delay,
         color_duration: settings.color_duration,
-        show_at,
-        hide_at,
+        count_end,
         elapsed: 0.0,
         overshoot: settings.overshoot,
         spin_end: settings.spin_duration,
@@ -306,7 +368,8 @@ pub fn plan(
 }
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
-/// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked.
+/// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked. While a
+/// voxelization setting is dragged the transition is instant: `step`, next in the chain, lands every voxel.
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
@@ -317,7 +380,9 @@ fn start(
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
+    drag: Res<SettingDrag>,
     voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
+    model_tweens: Query<Entity, With<ModelTween>>,
     mut last_look: Local<Option<(f32, bool)>>,
 ) {
     let restart = reassemble.read().count() > 0;
@@ -329,6 +394,7 @@ fn start(
         return;
     }
     *last_look = Some(look);
+    let transition = if drag.0 { transition.instant() } else { transition.clone() };
     let new = layout(model, &settings, &transition);
     // Voxel transforms are world space; tweens run in the cloud's (model) space.
     let unturn = active.turn().inverse();
@@ -357,9 +423,15 @@ fn start(
             }
         }
     }
-    let angle = active.angle();
-    active.spin = (angle, angle + transition.spin_angle);
-    active.spin_duration = transition.spin_duration;
+    // The model-level tweens: the spin and the visible count (the last transition's are replaced).
+    for tween in &model_tweens {
+        commands.entity(tween).despawn();
+    }
+    let angle = active.angle;
+    let spin = ModelLens::Spin { from: angle, to: angle + transition.spin_angle };
+    spawn_model_tween(&mut commands, &mut active, EaseFunction::QuadraticOut, transition.spin_duration, spin);
+    let count = ModelLens::Count { from: old_count as f32, to: new.len() as f32 };
+    spawn_model_tween(&mut commands, &mut active, EaseFunction::Linear, transition.count_duration, count);
     pool.shown = Some(id);
     pool.visible = new.len();
     active.count += 1;
@@ -374,6 +446,7 @@ type TweeningVoxels<'w, 's> = Query<
     's,
     (
         Entity,
+        &'static VoxelSlot,
         &'static mut VoxelTween,
         &'static mut Transform,
         &'static mut GlobalTransform,
@@ -383,7 +456,8 @@ type TweeningVoxels<'w, 's> = Query<
     Without<VoxelCloud>,
 >;
 
-/// Steps every voxel tween in parallel; finished ones snap to their end and are removed.
+/// Steps every voxel tween in parallel (after the model-level tweens: the spin and the visible count are this
+/// frame's); finished ones snap to their end and are removed.
 fn step(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
@@ -399,10 +473,11 @@ fn step(
     }
     let rotation = active.turn();
     let turn = Mat3A::from_quat(rotation);
+    let shown = active.shown;
     if let Ok(mut cloud) = cloud.single_mut() {
         cloud.rotation = rotation;
     }
-    tweens.par_iter_mut().for_each(|(entity, mut tween, mut transform, mut global, mut tag, mut visibility)| {
+    tweens.par_iter_mut().for_each(|(entity, slot, mut tween, mut transform, mut global, mut tag, mut visibility)| {
         tween.elapsed += dt;
         let (position, scale) = tween.transform();
         // Voxels have no parent, so their global transform is their transform: write both here and keep the
@@ -418,7 +493,8 @@ fn step(
                 tag.0 = color;
             }
         }
-        visibility.set_if_neq(if tween.visible() { Visibility::Inherited } else { Visibility::Hidden });
+        let visible = (slot.0 as f32) < shown;
+        visibility.set_if_neq(if visible { Visibility::Inherited } else { Visibility::Hidden });
         if tween.elapsed >= tween.end() {
             par_commands.command_scope(|mut commands| {
                 commands.entity(entity).remove::<VoxelTween>();
@@ -470,9 +546,20 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
     app.register_type::<TransitionSettings>();
+    if !app.is_plugin_added::<TweeningPlugin>() {
+        app.add_plugins(TweeningPlugin);
+    }
     app.add_systems(
         Update,
-        (placeholder, float_placeholder, start, step).chain().in_set(AppSystems::Animate).in_set(TransitionSystems),
+        (placeholder, float_placeholder, start, pace, step)
+            .chain()
+            .in_set(AppSystems::Animate)
+            .in_set(TransitionSystems),
+    );
+    // bevy_tweening's one (exclusive) system steps the model-level tweens between their pace and the voxels' step.
+    app.configure_sets(
+        Update,
+        AnimationSystem::AnimationUpdate.in_set(AppSystems::Animate).in_set(TransitionSystems).after(pace).before(step),
     );
 }
 

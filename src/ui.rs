@@ -9,7 +9,7 @@ use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
 use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
-use crate::settings::{PanelOpen, RepelSettings, Style, VoxelSettings};
+use crate::settings::{PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
 fn status_mark(status: &ModelStatus) -> &'static str {
@@ -43,14 +43,16 @@ fn model_list(ui: &mut egui::Ui, library: &ModelLibrary, requests: &mut MessageW
     ui.label(egui::RichText::new("Drop .glb/.gltf files on the window to add them.").small());
 }
 
-fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style, repel: &mut RepelSettings) {
+/// The voxels' parameters; returns whether the grid slider is being dragged.
+fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style, repel: &mut RepelSettings) -> bool {
     ui.heading("Voxels");
     egui::ComboBox::from_label("style").selected_text(style.label()).show_ui(ui, |ui| {
         for choice in Style::ALL {
             ui.selectable_value(style, choice, choice.label());
         }
     });
-    ui.add(egui::Slider::new(&mut settings.grid_size, VoxelSettings::GRID_RANGE).text("grid size").logarithmic(true));
+    let grid = ui
+        .add(egui::Slider::new(&mut settings.grid_size, VoxelSettings::GRID_RANGE).text("grid size").logarithmic(true));
     ui.add(egui::Slider::new(&mut settings.box_size, 0.4..=1.0).text("box size"));
     ui.add(egui::Slider::new(&mut settings.roundness, 0.0..=0.5).text("roundness"));
     ui.add(egui::Slider::new(&mut settings.speed, 0.2..=3.0).text("speed"));
@@ -69,6 +71,7 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
     if *style == Style::Falling {
         ui.label("F: drop / reassemble");
     }
+    grid.dragged()
 }
 
 fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
@@ -142,6 +145,7 @@ fn export_button(ui: &mut egui::Ui, status: &ExportStatus, export: &mut MessageW
 fn panel(
     mut contexts: EguiContexts,
     mut settings: ResMut<VoxelSettings>,
+    mut drag: ResMut<SettingDrag>,
     mut repel: ResMut<RepelSettings>,
     panel_open: Res<PanelOpen>,
     style: Res<State<Style>>,
@@ -159,6 +163,7 @@ fn panel(
     ctx.set_visuals(egui::Visuals::light());
     over.panel = ctx.is_pointer_over_egui() || ctx.egui_wants_pointer_input();
     if !panel_open.0 {
+        drag.set_if_neq(SettingDrag(false));
         return Ok(());
     }
     let mut root = egui::Ui::new(
@@ -169,12 +174,13 @@ fn panel(
     let mut edited = settings.clone();
     let mut chosen = *style.get();
     let mut edited_repel = repel.clone();
+    let mut dragging = false;
     egui::Panel::left("voxel-art panel").resizable(false).exact_size(270.0).show_inside(&mut root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             ui.heading("voxel-art");
             model_list(ui, &library, &mut requests);
             ui.separator();
-            parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
+            dragging = parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
             let mut edited_transition = transition.clone();
             transition_settings(ui, &mut edited_transition);
             if edited_transition != *transition {
@@ -195,6 +201,7 @@ fn panel(
     if edited != *settings {
         *settings = edited;
     }
+    drag.set_if_neq(SettingDrag(dragging));
     if edited_repel != *repel {
         *repel = edited_repel;
     }

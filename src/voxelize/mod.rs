@@ -1,8 +1,9 @@
 //! Voxelization in the app, on the `AsyncComputeTaskPool`: the file → the core's importer (the same reader
 //! as the CLI, so the app and the CLI give the same cells and colours) → triangle soup, kept for later
-//! settings → the core voxelizer → [`VoxelModelAsset`]s. A settings change re-voxelizes every model; results
-//! of stale settings are dropped (latest wins). Once the core has read a file, Bevy's glTF loader is asked
-//! for it too, for its preview tile only.
+//! settings → the core voxelizer → [`VoxelModelAsset`]s. A settings change re-voxelizes every model, the one on
+//! screen first, and while a setting is dragged ([`SettingDrag`]) only that one; results of stale settings are
+//! dropped (latest wins). Once the core has read a file, Bevy's glTF loader is asked for it too, for its
+//! preview tile only.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,7 +16,7 @@ use voxel_core::{TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::{Style, VoxelSettings};
+use crate::settings::{SettingDrag, Style, VoxelSettings};
 
 /// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -72,18 +73,25 @@ fn track_settings(
     *last = Some(options);
 }
 
-/// Starts a job for every model whose voxels are missing or stale and that has no current job.
+/// Starts a job for every model whose voxels are missing or stale and that has no current job, the model on
+/// screen first (the async pool has one thread on a 2-core machine: what is spawned first runs first). While a
+/// setting is dragged only the model on screen gets a job; the others wait, marked voxelizing, for the drag to
+/// end.
 fn start_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     settings: Res<VoxelSettings>,
     style: Res<State<Style>>,
+    drag: Res<SettingDrag>,
     generation: Res<VoxelizeGeneration>,
     jobs: Query<(Entity, &VoxelizeJob)>,
 ) {
     let options = settings.voxelize_options(*style.get());
     let pool = AsyncComputeTaskPool::get();
-    for (i, entry) in library.entries.iter_mut().enumerate() {
+    let current = library.current;
+    let order = std::iter::once(current).chain((0..library.entries.len()).filter(|&i| i != current));
+    for i in order {
+        let Some(entry) = library.entries.get_mut(i) else { continue };
         if matches!(entry.status, ModelStatus::Failed(_)) || entry.voxels_generation == Some(generation.0) {
             continue;
         }
@@ -96,15 +104,21 @@ fn start_jobs(
                 commands.entity(job_entity).despawn();
             }
         }
-        if !running {
-            let input = match &entry.soup {
-                Some(soup) => JobInput::Read(soup.clone()),
-                None => JobInput::File(entry.path.clone()),
-            };
-            entry.status = if entry.soup.is_some() { ModelStatus::Voxelizing } else { ModelStatus::Loading };
-            let task = pool.spawn(async move { input.run(&options) });
-            commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), task });
+        if running {
+            continue;
         }
+        if entry.soup.is_some() {
+            entry.status = ModelStatus::Voxelizing;
+        }
+        if drag.0 && i != current {
+            continue;
+        }
+        let input = match &entry.soup {
+            Some(soup) => JobInput::Read(soup.clone()),
+            None => JobInput::File(entry.path.clone()),
+        };
+        let task = pool.spawn(async move { input.run(&options) });
+        commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), task });
     }
 }
 

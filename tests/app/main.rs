@@ -7,5 +7,6 @@ mod harness;
 mod logic;
 mod modules;
 mod render;
+mod slider;
 mod styles;
 mod transition;

@@ -179,3 +179,35 @@ fn rapid_switching_keeps_entities_and_tweens_bounded() {
     settle(&mut app);
     assert_shows_model(&mut app);
 }
+
+#[test]
+fn the_spin_and_the_visible_count_follow_their_model_level_tweens() {
+    use voxel_art::transition::ModelTween;
+    let mut app = ready_app();
+    let t = app.world().resource::<TransitionSettings>().clone();
+    let start_angle = app.world().resource::<ActiveTransition>().angle;
+    let old = app.world().resource::<VoxelPool>().visible as f32;
+    app.world_mut().write_message(LibraryRequest::Next);
+    let frames = (t.spin_duration * 60.0).ceil() as usize + 2;
+    for k in 1..=frames {
+        // The transition starts in the first frame and every frame steps 1/60 s (speed 1).
+        app.update();
+        let s = k as f32 / 60.0;
+        let active = app.world().resource::<ActiveTransition>();
+        let u = (s / t.spin_duration).min(1.0);
+        let angle = start_angle + t.spin_angle * u * (2.0 - u);
+        assert!((active.angle - angle).abs() < 1e-4, "frame {k}: angle {} instead of {angle}", active.angle);
+        let new = app.world().resource::<VoxelPool>().visible as f32;
+        let count = old + (new - old) * (s / t.count_duration).min(1.0);
+        assert!((active.shown - count).abs() < 0.01 * (new - old).abs() + 1.0, "frame {k}: count {}", active.shown);
+        let shown = active.shown;
+        let mut voxels = app.world_mut().query::<&Visibility>();
+        let visible = voxels.iter(app.world()).filter(|v| **v == Visibility::Inherited).count() as f32;
+        assert!((visible - shown).abs() <= 1.0, "frame {k}: {visible} voxels show for a count of {shown}");
+        let mut tweens = app.world_mut().query::<&ModelTween>();
+        assert!(tweens.iter(app.world()).count() <= 2, "model-level tweens are replaced, never stacked");
+    }
+    assert_eq!(app.world().resource::<ActiveTransition>().angle, start_angle + t.spin_angle);
+    settle(&mut app);
+    assert_shows_model(&mut app);
+}
