@@ -28,7 +28,7 @@ fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize
         let t = Instant::now();
         let m = voxelize(soup, &options).expect("voxelize");
         times.push(t.elapsed().as_secs_f64() * 1e3);
-        voxels = m.voxels.len();
+        voxels = m.len();
     }
     times.sort_by(f64::total_cmp);
     (times[times.len() / 2], voxels)

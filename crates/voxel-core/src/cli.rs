@@ -253,7 +253,7 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
             surface: s.surface,
             visible: s.visible,
             colors: s.colors,
-            output_voxels: model.voxels.len(),
+            output_voxels: model.len(),
             load_ms,
             voxelize_ms,
             vox,
@@ -276,7 +276,7 @@ fn process(file: &Path, args: &Args, options: &VoxelizeOptions, several: bool) -
             s.voxels,
             s.surface,
             s.visible,
-            model.voxels.len(),
+            model.len(),
             s.colors
         ))
     }

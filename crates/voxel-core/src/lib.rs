@@ -17,10 +17,12 @@ pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
+pub mod model;
 mod orient;
 pub mod shapes;
 mod shell;
 pub mod soup;
+mod visible;
 pub mod vox;
 pub mod voxelize;
 

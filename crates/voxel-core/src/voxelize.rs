@@ -15,6 +15,9 @@ use crate::geom::{GridTriangle, closest_point_barycentric, distance2};
 use crate::grid::{BitGrid, GridSize, GridSpec};
 use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
+use crate::visible::visible_cells;
+
+pub use crate::model::{Voxel, VoxelModel, VoxelStats};
 
 /// How the inside of the model is found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -98,56 +101,6 @@ impl Default for VoxelizeOptions {
     }
 }
 
-/// One filled cell.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Voxel {
-    /// Cell coordinates (x, y, z).
-    pub cell: [u16; 3],
-    /// sRGB RGBA8 colour.
-    pub color: [u8; 4],
-    /// Index of the source part (glTF primitive instance) the colour came from.
-    pub part: u32,
-    /// Whether the cell has an empty face neighbour (can be seen from outside).
-    pub visible: bool,
-}
-
-/// Counts describing a voxelization.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct VoxelStats {
-    /// Triangles in the model.
-    pub triangles: usize,
-    /// Grid size in cells.
-    pub grid: [u32; 3],
-    /// Filled cells (solid, before any hollowing).
-    pub voxels: usize,
-    /// Cells a triangle touches (the surface shell).
-    pub surface: usize,
-    /// Filled cells with an empty face neighbour.
-    pub visible: usize,
-    /// Distinct colours among the output voxels.
-    pub colors: usize,
-}
-
-/// A voxelized model: the grid placement and the output voxels, ascending by (x, y, z).
-#[derive(Clone, Debug, PartialEq)]
-pub struct VoxelModel {
-    /// Where the grid sits in normalized model space.
-    pub spec: GridSpec,
-    /// The voxels (only visible ones when hollowed).
-    pub voxels: Vec<Voxel>,
-    /// Counts.
-    pub stats: VoxelStats,
-    /// Names of the source parts (index = `Voxel::part`).
-    pub parts: Vec<String>,
-}
-
-impl VoxelModel {
-    /// Model-space centre of a voxel.
-    pub fn center(&self, v: &Voxel) -> [f32; 3] {
-        self.spec.cell_center(v.cell.map(u32::from))
-    }
-}
-
 /// Voxelizes `soup` with `options`.
 pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
     voxelize_timed(soup, options).map(|(model, _)| model)
@@ -213,7 +166,6 @@ fn voxelize_within_timed(
     if options.pastel {
         colors.par_iter_mut().for_each(|(c, _)| *c = pastel(*c));
     }
-    let voxels = assemble(&spec, &solid, &visible, &colors, options.hollow);
     let stats = VoxelStats {
         triangles: soup.triangle_count(),
         grid: spec.dims,
@@ -223,20 +175,29 @@ fn voxelize_within_timed(
         // Interior voxels copy visible ones, so the visible cells hold every colour.
         colors: colors.iter().map(|c| c.0).collect::<HashSet<_>>().len(),
     };
-    Ok((VoxelModel { spec, voxels, stats, parts: soup.parts.iter().map(|p| p.name.clone()).collect() }, times))
+    let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
+    let solid = (!options.hollow).then_some(solid);
+    Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
 }
 
 /// The solid cells from the fill and the shell, per the modes.
 fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell) -> BitGrid {
-    let mut shell_bits = BitGrid::new(spec.cell_count());
-    for &c in &shell.cells {
-        shell_bits.set(c as usize);
-    }
+    let shell_bits = || {
+        let mut bits = BitGrid::new(spec.cell_count());
+        for &c in &shell.cells {
+            bits.set(c as usize);
+        }
+        bits
+    };
     match options.fill {
         FillMode::Winding | FillMode::Parity => {
             let mut solid = fill;
             match options.shell {
-                ShellMode::All => solid.union_with(&shell_bits),
+                ShellMode::All => {
+                    for &c in &shell.cells {
+                        solid.set(c as usize);
+                    }
+                }
                 ShellMode::Auto => {
                     for (k, &c) in shell.cells.iter().enumerate() {
                         if shell.thin[k] {
@@ -249,6 +210,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             solid
         }
         FillMode::Flood => {
+            let shell_bits = shell_bits();
             let outside = reachable_from_outside(spec, &shell_bits);
             let mut solid = BitGrid::new(spec.cell_count());
             for i in 0..spec.cell_count() {
@@ -258,39 +220,8 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             }
             solid
         }
-        FillMode::None => shell_bits,
+        FillMode::None => shell_bits(),
     }
-}
-
-/// Runs the per-column closure over every (x, y) column in parallel, concatenating results in order.
-fn per_column<T: Send>(spec: &GridSpec, f: impl Fn(u32, u32, usize) -> Vec<T> + Sync + Send) -> Vec<T> {
-    let [nx, ny, nz] = spec.dims;
-    (0..nx * ny).into_par_iter().flat_map_iter(|col| f(col / ny, col % ny, col as usize * nz as usize)).collect()
-}
-
-/// Solid cells with an empty face neighbour (the grid's outside counts as empty), ascending.
-fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
-    let [nx, ny, nz] = spec.dims;
-    let (sx, sy) = (ny as usize * nz as usize, nz as usize);
-    per_column(spec, |x, y, base| {
-        let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
-        (0..nz as usize)
-            .map(|z| base + z)
-            .filter(|&i| {
-                solid.get(i)
-                    && (side_open
-                        || i == base
-                        || i + 1 == base + nz as usize
-                        || !solid.get(i - 1)
-                        || !solid.get(i + 1)
-                        || !solid.get(i - sx)
-                        || !solid.get(i + sx)
-                        || !solid.get(i - sy)
-                        || !solid.get(i + sy))
-            })
-            .map(|i| i as u32)
-            .collect()
-    })
 }
 
 /// The steps to the six face neighbours.
@@ -354,67 +285,4 @@ fn surface_colors(
             None => ([255; 4], 0),
         })
         .collect()
-}
-
-/// Builds the output voxels. An interior cell takes the colour of the nearer end of its solid run
-/// along z (both ends of a run are visible cells): cheap, parallel and deterministic.
-fn assemble(spec: &GridSpec, solid: &BitGrid, visible: &[u32], colors: &[([u8; 4], u32)], hollow: bool) -> Vec<Voxel> {
-    let voxel = |i: usize, (color, part): ([u8; 4], u32), visible: bool| Voxel {
-        cell: spec.coords(i).map(|c| c as u16),
-        color,
-        part,
-        visible,
-    };
-    if hollow {
-        return visible.par_iter().zip(colors).map(|(&i, &c)| voxel(i as usize, c, true)).collect();
-    }
-    let [nx, ny, nz] = spec.dims;
-    let nz = nz as usize;
-    // Size the output once and hand every column its own disjoint slice of it.
-    let counts: Vec<usize> =
-        (0..nx as usize * ny as usize).into_par_iter().map(|col| solid.count_range(col * nz..(col + 1) * nz)).collect();
-    let blank = Voxel { cell: [0; 3], color: [0; 4], part: 0, visible: false };
-    let mut voxels = vec![blank; counts.iter().sum()];
-    let mut rest = voxels.as_mut_slice();
-    let mut slices = Vec::with_capacity(counts.len());
-    for &n in &counts {
-        let (head, tail) = std::mem::take(&mut rest).split_at_mut(n);
-        slices.push(head);
-        rest = tail;
-    }
-    slices.into_par_iter().enumerate().filter(|(_, s)| !s.is_empty()).for_each(|(col, out)| {
-        let base = col * nz;
-        let cell = |z: usize| [(col / ny as usize) as u16, (col % ny as usize) as u16, z as u16];
-        let mut next_visible = visible.partition_point(|&v| (v as usize) < base);
-        let mut written = 0;
-        let mut z = 0;
-        while z < nz {
-            if !solid.get(base + z) {
-                z += 1;
-                continue;
-            }
-            let start = z;
-            while z < nz && solid.get(base + z) {
-                z += 1;
-            }
-            // Both ends of the run are visible; interior cells copy the nearer end.
-            let run_first = next_visible;
-            let run_last = run_first + visible[run_first..].partition_point(|&v| (v as usize) < base + z) - 1;
-            for k in start..z {
-                let on_surface = next_visible < visible.len() && visible[next_visible] as usize == base + k;
-                let source = if on_surface {
-                    next_visible += 1;
-                    next_visible - 1
-                } else if k - start <= z - 1 - k {
-                    run_first
-                } else {
-                    run_last
-                };
-                let (color, part) = colors[source];
-                out[written] = Voxel { cell: cell(k), color, part, visible: on_surface };
-                written += 1;
-            }
-        }
-    });
-    voxels
 }
