@@ -9,7 +9,7 @@
 //! `cargo bench -p voxel-core --bench voxelize -- fill-cost` prints, per model and R = 32, 64, 128, the
 //! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use voxel_core::shapes::cuboid;
@@ -18,6 +18,10 @@ use voxel_core::{FillMode, GridSize, Method, TriangleSoup, VoxelizeOptions, load
 
 #[path = "../tests/support/models.rs"]
 mod models;
+
+#[path = "../tests/support/corpus.rs"]
+mod corpus;
+use corpus::corpus;
 
 /// Median wall time in ms of `runs` voxelizations, and the voxel count.
 fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize) {
@@ -75,18 +79,6 @@ fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
             winding_ms / parity_ms
         );
     }
-}
-
-/// The models of the corpus folder and its subfolders, sorted.
-fn corpus(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = voxel_core::cli::expand_inputs(&[dir.to_path_buf()]);
-    for sub in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-        if sub.path().is_dir() {
-            files.extend(voxel_core::cli::expand_inputs(&[sub.path()]));
-        }
-    }
-    files.sort();
-    files
 }
 
 /// Calls `f` with the name (relative to `dir`) and soup of every model of `files` that loads.

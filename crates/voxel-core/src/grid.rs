@@ -416,7 +416,7 @@ mod tests {
         assert_eq!(b.bits(60, 10), 0b11_1111_1111);
         assert_eq!(b.bits(58, 4), 0b1100);
         assert_eq!(b.bits(100, 64), u64::MAX);
-        assert_eq!(b.bits(136, 64), (1u64 << 28) - 1 | 1 << 63);
+        assert_eq!(b.bits(136, 64), ((1u64 << 28) - 1) | (1 << 63));
         assert_eq!(b.runs(0..200).collect::<Vec<_>>(), vec![60..70, 100..164, 199..200]);
         assert_eq!(b.runs(65..120).collect::<Vec<_>>(), vec![65..70, 100..120]);
         assert_eq!(b.runs(70..100).count(), 0);

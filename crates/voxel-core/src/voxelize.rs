@@ -1,6 +1,5 @@
 //! The voxelization pipeline: normalize → fill → shell → combine → colour → (hollow).
 
-use std::collections::HashSet;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -11,7 +10,7 @@ use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
-use crate::geom::{GridTriangle, closest_point_barycentric, distance2};
+use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
 use crate::grid::{BitGrid, GridSize, GridSpec};
 use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
@@ -173,11 +172,18 @@ fn voxelize_within_timed(
         surface: shell.cells.len(),
         visible: visible.len(),
         // Interior voxels copy visible ones, so the visible cells hold every colour.
-        colors: colors.iter().map(|c| c.0).collect::<HashSet<_>>().len(),
+        colors: distinct(colors.iter().map(|c| u32::from_le_bytes(c.0)).collect()),
     };
     let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
     let solid = (!options.hollow).then_some(solid);
     Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
+}
+
+/// The number of distinct values.
+fn distinct(mut values: Vec<u32>) -> usize {
+    values.par_sort_unstable();
+    values.dedup();
+    values.len()
 }
 
 /// The solid cells from the fill and the shell, per the modes.
@@ -227,10 +233,26 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
 /// The steps to the six face neighbours.
 const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]];
 
-/// The nearest triangle to grid point `p` among `candidates` (ties: lower index).
-fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<usize> {
-    candidates.map(|t| (t, distance2(p, &tris[t]))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0))).map(|n| n.0)
+/// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
+/// weights of its closest point.
+fn nearest_among(
+    tris: &[GridTriangle],
+    p: DVec3,
+    candidates: impl Iterator<Item = usize>,
+) -> Option<(usize, [f64; 3])> {
+    let mut best: Option<(usize, f64, [f64; 3])> = None;
+    for t in candidates {
+        let w = closest_point_barycentric(p, &tris[t]);
+        let d = point_at(&tris[t], w).distance_squared(p);
+        if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {
+            best = Some((t, d, w));
+        }
+    }
+    best.map(|(t, _, w)| (t, w))
 }
+
+/// Visible cells handed to one task of the colour pass.
+const CELLS_PER_TASK: usize = 1024;
 
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
@@ -253,13 +275,21 @@ fn surface_colors(
         DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
     };
     let shell_triangles = |cell: usize| shell.triangles_of(cell).iter().map(|&t| t as usize);
-    let mut nearest: Vec<Option<usize>> = visible
-        .par_iter()
-        .map(|&i| {
-            let p = centre(i);
-            nearest_among(tris, p, shell_triangles(i as usize)).or_else(|| {
-                let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
-                nearest_among(tris, p, faces.flat_map(shell_triangles))
+    // Visible and shell cells are both ascending: each task walks the two lists side by side.
+    let mut nearest: Vec<Option<(usize, [f64; 3])>> = visible
+        .par_chunks(CELLS_PER_TASK)
+        .flat_map_iter(|chunk| {
+            let mut k = shell.cells.partition_point(|&c| c < chunk[0]);
+            chunk.iter().map(move |&i| {
+                while shell.cells.get(k).is_some_and(|&c| c < i) {
+                    k += 1;
+                }
+                let own: &[u32] = if shell.cells.get(k) == Some(&i) { shell.triangles_at(k) } else { &[] };
+                let p = centre(i);
+                nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
+                    let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
+                    nearest_among(tris, p, faces.flat_map(shell_triangles))
+                })
             })
         })
         .collect();
@@ -275,13 +305,14 @@ fn surface_colors(
             let octree = ShellOctree::new(spec, shell);
             Box::new(move |p| octree.nearest(tris, p))
         };
-        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| *t = far(centre(i)));
+        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| {
+            *t = far(centre(i)).map(|t| (t, closest_point_barycentric(centre(i), &tris[t])));
+        });
     }
-    visible
+    nearest
         .par_iter()
-        .zip(&nearest)
-        .map(|(&i, &t)| match t {
-            Some(t) => (sample(soup, t, closest_point_barycentric(centre(i), &tris[t])), soup.triangle_parts[t]),
+        .map(|&t| match t {
+            Some((t, w)) => (sample(soup, t, w), soup.triangle_parts[t]),
             None => ([255; 4], 0),
         })
         .collect()
