@@ -171,3 +171,44 @@ impl VoxelModel {
         Voxel { cell: self.spec.coords(index).map(|c| c as u16), color, part, visible }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{GridSize, TriangleSoup, shapes::cuboid};
+
+    /// A solid block of 3 × 3 × 6 cells, each coloured by its z.
+    fn block() -> VoxelModel {
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [3.0, 3.0, 6.0]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(6), 1.0, 1 << 26).unwrap();
+        assert_eq!(spec.dims, [3, 3, 6]);
+        let cells = (0..3u16).flat_map(|x| (0..3u16).flat_map(move |y| (0..6u16).map(move |z| [x, y, z])));
+        VoxelModel::from_cells(spec, cells.map(|c| (c, [c[2] as u8 * 10, 0, 0, 255])))
+    }
+
+    #[test]
+    fn interior_cells_take_the_colour_of_the_nearer_end_of_their_run() {
+        let m = block();
+        assert_eq!((m.len(), m.stats.visible), (54, 50));
+        let all: Vec<Voxel> = m.voxels().collect();
+        assert_eq!(all.len(), 54);
+        assert!(all.windows(2).all(|w| w[0].cell < w[1].cell), "ascending by (x, y, z)");
+        let interior: Vec<([u16; 3], u8)> = all.iter().filter(|v| !v.visible).map(|v| (v.cell, v.color[0])).collect();
+        // The middle column's run is z = 0…5: z = 1, 2 are nearer (or as near as) its bottom, 3, 4 its top.
+        assert_eq!(interior, vec![([1, 1, 1], 0), ([1, 1, 2], 0), ([1, 1, 3], 50), ([1, 1, 4], 50)]);
+        assert!(all.iter().filter(|v| v.visible).eq(m.visible_voxels().collect::<Vec<_>>().iter()));
+    }
+
+    #[test]
+    fn a_hollowed_model_outputs_and_occupies_only_its_visible_cells() {
+        let mut m = block().hollowed();
+        assert!(m.is_hollow());
+        assert_eq!(m.len(), 50);
+        assert!(m.voxels().all(|v| v.visible));
+        let occupied = m.occupancy();
+        assert_eq!(occupied.count(), 50);
+        assert!(!occupied.get(m.spec.index(1, 1, 2)));
+        m.recolor(|v| [v.cell[0] as u8, 1, 2, 3]);
+        assert!(m.voxels().all(|v| v.color == [v.cell[0] as u8, 1, 2, 3]));
+    }
+}

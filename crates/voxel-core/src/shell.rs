@@ -56,8 +56,10 @@ fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bo
 }
 
 /// How much of the triangle–box test a candidate cell needs.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Test {
+    /// No test: the cell's footprint lies outside the triangle's projection.
+    Outside,
     /// None: the cell holds the whole triangle.
     Known,
     /// The box axes and the plane: the cell's footprint lies inside the triangle's projection.
@@ -66,9 +68,10 @@ enum Test {
     Full,
 }
 
-/// Whether a unit square of the plane across a triangle's dominant axis lies inside the triangle's
-/// projection on that plane, by a margin far above rounding: then no edge of the triangle passes over the
-/// square, and a cell above it overlaps the triangle exactly when the triangle's plane crosses the cell.
+/// Where a unit square of the plane across a triangle's dominant axis lies against the triangle's projection
+/// on that plane, by a margin far above rounding. Inside, no edge of the triangle passes over the square, and
+/// a cell above it overlaps the triangle exactly when the triangle's plane crosses the cell; outside, no cell
+/// above it overlaps the triangle.
 struct FootprintTest {
     /// Per edge: its start (u, v), its direction (du, dv) times the projection's orientation, and the
     /// smallest value its edge function must exceed at a square's centre.
@@ -88,10 +91,20 @@ impl FootprintTest {
         Self { edges }
     }
 
-    /// Whether the square [iu, iu + 1] × [iv, iv + 1] lies strictly inside, with the margin.
-    fn contains_cell(&self, iu: u32, iv: u32) -> bool {
+    /// Where the square [iu, iu + 1] × [iv, iv + 1] lies: strictly inside, strictly outside one edge (then
+    /// that edge's direction × the dominant axis separates the triangle from every cell above the square),
+    /// or across an edge, each with the margin.
+    fn place(&self, iu: u32, iv: u32) -> Test {
         let (cu, cv) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5);
-        self.edges.iter().all(|&(a, dir, reach)| dir[0] * (cv - a[1]) - dir[1] * (cu - a[0]) > reach)
+        let mut inside = true;
+        for &(a, dir, reach) in &self.edges {
+            let e = dir[0] * (cv - a[1]) - dir[1] * (cu - a[0]);
+            if e < -reach {
+                return Test::Outside;
+            }
+            inside &= e > reach;
+        }
+        if inside { Test::Plane } else { Test::Full }
     }
 }
 
@@ -113,9 +126,10 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
     // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
     let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
-    // The last cell that the extent [from, to] along axis `a` reaches with positive length.
-    let last_cell_of =
-        |a: usize, from: f64, to: f64| cell_of(a, if to > from && to == to.floor() { to - 1.0 } else { to });
+    // The last cell that the extent [from, to] along axis `a` reaches with positive length. (`to` is a whole
+    // number when the round trip through i64 keeps it; beyond i64's range, `to − 1` is `to` anyway.)
+    let whole = |to: f64| to == (to as i64) as f64;
+    let last_cell_of = |a: usize, from: f64, to: f64| cell_of(a, if to > from && whole(to) { to - 1.0 } else { to });
     // Only triangles with candidate cells near their edges need the full test.
     let tester = std::cell::OnceCell::new();
     let tester = || tester.get_or_init(|| BoxTester::new(t));
@@ -123,6 +137,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
         let half = DVec3::splat(0.5);
         let overlaps = match test {
+            Test::Outside => false,
             Test::Known => true,
             Test::Plane => tester().overlaps_plane(center, half),
             Test::Full => tester().overlaps(center, half),
@@ -152,7 +167,10 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let inside = FootprintTest::new(t, n[d].signum(), u, v);
     for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
         for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
-            let test = if inside.contains_cell(iu, iv) { Test::Plane } else { Test::Full };
+            let test = inside.place(iu, iv);
+            if test == Test::Outside {
+                continue;
+            }
             // Extent of the plane along the dominant axis over this cell's footprint.
             let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
             let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
@@ -248,13 +266,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn squares_inside_the_projection_need_only_the_plane_test() {
+    fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
         let mut state = 7u64;
         let mut next = |scale: f64| {
             state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64 * scale
         };
-        let mut inside_cells = 0;
+        let (mut inside_cells, mut outside_cells) = (0, 0);
         for _ in 0..200 {
             let t: GridTriangle = std::array::from_fn(|_| DVec3::new(next(12.0), next(12.0), next(12.0)));
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
@@ -269,17 +287,23 @@ mod tests {
             let (u, v) = ((d + 1) % 3, (d + 2) % 3);
             let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&t, n[d].signum(), u, v));
             for (iu, iv, id) in (0..12).flat_map(|a| (0..12).flat_map(move |b| (0..12).map(move |c| (a, b, c)))) {
-                if !inside.contains_cell(iu, iv) {
-                    continue;
-                }
-                inside_cells += 1;
                 let mut c = DVec3::ZERO;
                 (c[u], c[v], c[d]) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5, f64::from(id) + 0.5);
                 let half = DVec3::splat(0.5);
-                assert_eq!(tester.overlaps(c, half), tester.overlaps_plane(c, half), "{t:?} at {c}");
+                match inside.place(iu, iv) {
+                    Test::Plane => {
+                        inside_cells += 1;
+                        assert_eq!(tester.overlaps(c, half), tester.overlaps_plane(c, half), "{t:?} at {c}");
+                    }
+                    Test::Outside => {
+                        outside_cells += 1;
+                        assert!(!tester.overlaps(c, half), "{t:?} at {c}");
+                    }
+                    _ => {}
+                }
             }
         }
-        assert!(inside_cells > 10_000, "{inside_cells} cells inside");
+        assert!(inside_cells > 10_000 && outside_cells > 10_000, "{inside_cells} inside, {outside_cells} outside");
     }
 
     #[test]

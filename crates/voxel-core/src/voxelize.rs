@@ -251,6 +251,27 @@ fn nearest_among(
     best.map(|(t, _, w)| (t, w))
 }
 
+/// The position of `target` in the ascending `cells`, if there, searched outwards from position `k` (a
+/// galloping search: the cost grows with the log of the distance).
+fn position_near(cells: &[u32], k: usize, target: u32) -> Option<usize> {
+    let (mut lo, mut hi) = (k.min(cells.len()), k.min(cells.len()));
+    let mut step = 1;
+    if cells.get(k).is_some_and(|&c| c < target) {
+        while hi < cells.len() && cells[hi] < target {
+            (lo, hi) = (hi, (hi + step).min(cells.len()));
+            step *= 2;
+        }
+    } else {
+        while lo > 0 && cells[lo - 1] >= target {
+            (hi, lo) = (lo, lo.saturating_sub(step));
+            step *= 2;
+        }
+    }
+    // Now cells[..lo] < target and cells[hi..] >= target or hi is the end.
+    let at = lo + cells[lo..hi].partition_point(|&c| c < target);
+    (cells.get(at) == Some(&target)).then_some(at)
+}
+
 /// Visible cells handed to one task of the colour pass.
 const CELLS_PER_TASK: usize = 1024;
 
@@ -274,8 +295,8 @@ fn surface_colors(
         let c = spec.coords(i as usize);
         DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
     };
-    let shell_triangles = |cell: usize| shell.triangles_of(cell).iter().map(|&t| t as usize);
-    // Visible and shell cells are both ascending: each task walks the two lists side by side.
+    // Visible and shell cells are both ascending: each task walks the two lists side by side, and finds a
+    // neighbour's shell cell by galloping from where the walk is.
     let mut nearest: Vec<Option<(usize, [f64; 3])>> = visible
         .par_chunks(CELLS_PER_TASK)
         .flat_map_iter(|chunk| {
@@ -288,7 +309,8 @@ fn surface_colors(
                 let p = centre(i);
                 nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
                     let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
-                    nearest_among(tris, p, faces.flat_map(shell_triangles))
+                    let near = faces.filter_map(|n| position_near(&shell.cells, k, n as u32));
+                    nearest_among(tris, p, near.flat_map(|at| shell.triangles_at(at).iter().map(|&t| t as usize)))
                 })
             })
         })
@@ -316,4 +338,24 @@ fn surface_colors(
             None => ([255; 4], 0),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn galloping_finds_exactly_the_cells_present_from_any_start() {
+        let cells: Vec<u32> = (0..300).map(|k| k * 8 + k % 7).collect();
+        for k in 0..=cells.len() {
+            for target in 0..cells[cells.len() - 1] + 5 {
+                assert_eq!(
+                    position_near(&cells, k, target),
+                    cells.binary_search(&target).ok(),
+                    "from {k} for {target}"
+                );
+            }
+        }
+        assert_eq!(position_near(&[], 0, 4), None);
+    }
 }
