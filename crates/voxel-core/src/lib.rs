@@ -19,6 +19,7 @@ pub mod grid;
 pub mod import;
 pub mod model;
 mod orient;
+mod radix;
 pub mod shapes;
 mod shell;
 pub mod soup;

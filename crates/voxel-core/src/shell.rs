@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use crate::geom::{BoxTester, GridTriangle};
 use crate::grid::{BitGrid, GridSpec};
+use crate::radix;
 
 mod octree;
 pub(crate) use octree::ShellOctree;
@@ -196,37 +197,6 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     }
 }
 
-/// Bits of a packed overlap's cell sorted per pass of [`sort_by_cell`].
-const RADIX_BITS: u32 = 11;
-
-/// Sorts packed overlaps by their cell (below `cell_count`), keeping the order of overlaps of one cell: a
-/// least-significant-digit radix sort, two or three passes over the list for grids up to 2²⁴ or 2³³ cells.
-fn sort_by_cell(mut pairs: Vec<u64>, cell_count: usize) -> Vec<u64> {
-    let bits = usize::BITS - cell_count.saturating_sub(1).leading_zeros();
-    let mask = (1u64 << RADIX_BITS) - 1;
-    let mut sorted = vec![0u64; pairs.len()];
-    let mut shift = 32;
-    while shift < 32 + bits {
-        let digit = |p: u64| ((p >> shift) & mask) as usize;
-        let mut starts = vec![0usize; 1 << RADIX_BITS];
-        for &p in &pairs {
-            starts[digit(p)] += 1;
-        }
-        let mut total = 0;
-        for start in &mut starts {
-            (*start, total) = (total, total + *start);
-        }
-        for &p in &pairs {
-            let d = digit(p);
-            sorted[starts[d]] = p;
-            starts[d] += 1;
-        }
-        std::mem::swap(&mut pairs, &mut sorted);
-        shift += RADIX_BITS;
-    }
-    pairs
-}
-
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
     let pairs: Vec<u64> = (0..tris.len())
@@ -240,7 +210,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
             a
         });
     // The fold and reduce keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
-    let pairs = sort_by_cell(pairs, spec.cell_count());
+    let pairs = radix::sort_by_key(pairs, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
     // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
     let mut shell = Shell { offsets: vec![0], tris: Vec::with_capacity(pairs.len()), ..Shell::default() };
     for p in pairs {
@@ -304,15 +274,6 @@ mod tests {
             }
         }
         assert!(inside_cells > 10_000 && outside_cells > 10_000, "{inside_cells} inside, {outside_cells} outside");
-    }
-
-    #[test]
-    fn overlaps_sort_by_cell_keeping_the_order_within_a_cell() {
-        let cells = [5_000_000u64, 3, 70_000, 3, 5_000_000, 0, 2047, 2048];
-        let pairs: Vec<u64> = cells.iter().enumerate().map(|(tri, &c)| c << 32 | (tri as u64) << 1).collect();
-        let mut expected = pairs.clone();
-        expected.sort_unstable();
-        assert_eq!(sort_by_cell(pairs, 5_000_001), expected);
     }
 
     #[test]

@@ -12,6 +12,7 @@ use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
 use crate::grid::{BitGrid, GridSize, GridSpec};
+use crate::radix;
 use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
 use crate::visible::visible_cells;
@@ -181,7 +182,9 @@ fn voxelize_within_timed(
 
 /// The number of distinct values.
 fn distinct(mut values: Vec<u32>) -> usize {
-    values.par_sort_unstable();
+    // Neighbouring cells often share a colour: drop repeats before sorting.
+    values.dedup();
+    let mut values = radix::sort_by_key(values, u32::BITS, |&v| v);
     values.dedup();
     values.len()
 }
