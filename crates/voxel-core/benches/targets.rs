@@ -7,8 +7,9 @@
 //! only the models whose path contains one of them.
 //!
 //! `-- cold` instead measures what a fresh process pays before its first voxelization is as fast as the
-//! next ones: it starts itself once per sample and reports the thread pool's start and the first
-//! voxelization's excess over the warm median (the first touch of its allocations).
+//! next ones: it starts itself once per sample (medians of 7) and reports the thread pool's start, the first
+//! voxelization and the warm median, and the overhead: pool start + first − warm (the pool's threads and
+//! the first touch of the allocations), each as wall time (CPU time).
 
 use std::path::Path;
 use std::process::Command;
@@ -111,27 +112,30 @@ fn print_targets(name: &str, soup: &TriangleSoup) {
     );
 }
 
-/// In a fresh process: the thread pool's start, the first voxelization and the median of the next five, in ms.
+/// In a fresh process: the thread pool's start, the first voxelization and the median of the next five, in
+/// ms of wall time, then the same in CPU time.
 fn cold_child(file: &Path, r: Option<u32>) {
     let soup = load_file(file).expect("load");
-    let started = Instant::now();
-    rayon::join(|| (), || ());
-    let pool = started.elapsed().as_secs_f64() * 1e3;
     let options = options(r, false);
-    let started = Instant::now();
+    let (cpu_start, started) = (cpu::cpu_ns().unwrap_or(0), Instant::now());
+    rayon::join(|| (), || ());
+    let (pool_cpu, pool) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3);
     voxelize(&soup, &options).expect("voxelize");
-    let first = started.elapsed().as_secs_f64() * 1e3;
-    println!("{pool} {first} {}", measure(&soup, &options, 5).0.wall);
+    let (first_cpu, first) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3 - pool);
+    let (warm, _) = measure(&soup, &options, 5);
+    let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 / 1e6;
+    let (pool_cpu_ms, first_cpu_ms) = (ms(cpu_start, pool_cpu), ms(pool_cpu, first_cpu));
+    println!("{pool} {first} {} {pool_cpu_ms} {first_cpu_ms} {}", warm.wall, warm.cpu);
 }
 
 /// The cold table: medians over fresh processes.
 fn print_cold(dir: &Path) {
-    println!("| model | grid | thread pool start ms | first voxelization ms | warm median ms | cold overhead ms |");
+    println!("| model | grid | pool start ms | first voxelization ms | warm ms | cold overhead ms |");
     println!("|---|---|---:|---:|---:|---:|");
     let exe = std::env::current_exe().expect("the bench's path");
     for (model, r) in COLD_MODELS {
         let file = dir.join(model);
-        let samples: Vec<[f64; 3]> = (0..COLD_SAMPLES)
+        let samples: Vec<[f64; 6]> = (0..COLD_SAMPLES)
             .map(|_| {
                 let mut child = Command::new(&exe);
                 child.arg("cold-child").arg(&file).arg(r.map_or_else(|| "default".into(), |r| r.to_string()));
@@ -141,10 +145,16 @@ fn print_cold(dir: &Path) {
                 values.try_into().unwrap_or_else(|v| panic!("cold child printed {v:?}: {text}"))
             })
             .collect();
-        let column = |k: usize| median(samples.iter().map(|s| s[k]).collect());
-        let overhead = median(samples.iter().map(|s| s[0] + s[1] - s[2]).collect());
+        // Each as "wall (CPU)": a column's medians, and the overhead pool + first − warm per sample.
+        let cell = |k: usize| {
+            let (wall, cpu) =
+                (median(samples.iter().map(|s| s[k]).collect()), median(samples.iter().map(|s| s[k + 3]).collect()));
+            Timing { wall, cpu }
+        };
+        let overhead = |k: usize| median(samples.iter().map(|s| s[k] + s[k + 1] - s[k + 2]).collect());
+        let overhead = Timing { wall: overhead(0), cpu: overhead(3) };
         let grid = r.map_or_else(|| "default".into(), |r| format!("R={r}"));
-        println!("| {model} | {grid} | {:.2} | {:.2} | {:.2} | {overhead:.2} |", column(0), column(1), column(2));
+        println!("| {model} | {grid} | {} | {} | {} | {overhead} |", cell(0), cell(1), cell(2));
     }
 }
 
