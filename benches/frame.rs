@@ -101,7 +101,7 @@ fn main() {
         return;
     }
     let sphere = big_model();
-    println!("voxels: sphere {}; threads: {}", sphere.voxels.len(), bevy::tasks::available_parallelism());
+    println!("voxels: sphere {}; threads: {}", sphere.len(), bevy::tasks::available_parallelism());
     if wanted("static") {
         let mut app = app_with(vec![sphere.clone()]);
         let (mean, median) = measure(&mut app, 30, 300);
@@ -116,7 +116,7 @@ fn main() {
     if wanted("morph") {
         // Mid-morph: frames 12..60 after a switch, when every voxel's delay (≤ 0.2 s) has passed.
         let cube = cube_model();
-        println!("voxels: cube {}", cube.voxels.len());
+        println!("voxels: cube {}", cube.len());
         let mut app = app_with(vec![sphere.clone(), cube]);
         app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
         let tweening =

@@ -16,18 +16,18 @@ pub struct VoxelModelAsset(pub VoxelModel);
 
 impl VoxelModelAsset {
     /// The voxels shown: only those that can be seen when `hollow`, else all.
-    pub fn shown(&self, hollow: bool) -> impl Iterator<Item = &Voxel> {
-        self.voxels.iter().filter(move |v| v.visible || !hollow)
+    pub fn shown(&self, hollow: bool) -> Box<dyn Iterator<Item = Voxel> + Send + '_> {
+        if hollow { Box::new(self.visible_voxels()) } else { self.voxels() }
     }
 
     /// The model as shown: only its visible voxels when `hollow`, else all of them (what an export saves).
     pub fn shown_model(&self, hollow: bool) -> VoxelModel {
-        VoxelModel { voxels: self.shown(hollow).copied().collect(), ..self.0.clone() }
+        if hollow { self.hollowed() } else { self.0.clone() }
     }
 
     /// How many voxels are shown.
     pub fn shown_count(&self, hollow: bool) -> usize {
-        if hollow { self.stats.visible } else { self.voxels.len() }
+        if hollow { self.stats.visible } else { self.len() }
     }
 }
 

@@ -88,7 +88,7 @@ fn probe(
     let eye = camera_transform.translation();
     let (centers, radius) = model.map_or((Vec::new(), 0.0), |m| {
         let cell = Vec3::from(m.spec.cell);
-        (m.shown(hollow).map(|v| Vec3::from(m.center(v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
+        (m.shown(hollow).map(|v| Vec3::from(m.center(&v))).collect::<Vec<_>>(), cell.max_element() * 0.87)
     });
     // Every voxel centre's shadow on the floor, along the light's direction.
     let dir = light.forward().as_vec3();

@@ -126,7 +126,7 @@ pub fn voxel_target(model: &voxel_core::VoxelModel, v: &Voxel, box_size: f32) ->
 
 /// The voxel layout of `model` (only its visible voxels when `hollow`) with boxes `box_size` of a cell.
 pub fn targets_for(model: &VoxelModelAsset, box_size: f32, hollow: bool) -> Vec<VoxelTarget> {
-    model.shown(hollow).map(|v| voxel_target(model, v, box_size)).collect()
+    model.shown(hollow).map(|v| voxel_target(model, &v, box_size)).collect()
 }
 
 /// Number of placeholder boxes shown before any model is ready.

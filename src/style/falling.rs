@@ -129,7 +129,7 @@ fn control(
     let Some(model) = models.get(id) else { return };
     // The voxels a hollow display hides fall too, from their cells, on spare slots of the pool.
     let interior: Vec<_> = if settings.hollow {
-        model.voxels.iter().filter(|v| !v.visible).map(|v| voxel_target(model, v, settings.box_size)).collect()
+        model.voxels().filter(|v| !v.visible).map(|v| voxel_target(model, &v, settings.box_size)).collect()
     } else {
         Vec::new()
     };

@@ -53,13 +53,13 @@ fn finished_export(app: &mut App) -> ExportStatus {
 /// cells (at the same cell size, with the same hollowing).
 fn assert_files_hold(saved: &Saved, model: &VoxelModel, hollow: bool) {
     let vox = dot_vox::load(saved.vox.0.to_str().unwrap()).unwrap();
-    assert_eq!(vox.models.iter().map(|m| m.voxels.len()).sum::<usize>(), model.voxels.len());
-    assert_eq!(saved.vox.1.voxels, model.voxels.len());
+    assert_eq!(vox.models.iter().map(|m| m.voxels.len()).sum::<usize>(), model.len());
+    assert_eq!(saved.vox.1.voxels, model.len());
 
     let soup = voxel_core::load_file(&saved.glb.0).unwrap();
     assert_eq!(soup.triangle_count(), 2 * saved.glb.1.quads);
     let sides: [u32; 3] = std::array::from_fn(|a| {
-        let (lo, hi) = model.voxels.iter().fold((u16::MAX, 0), |(lo, hi), v| (lo.min(v.cell[a]), hi.max(v.cell[a])));
+        let (lo, hi) = model.voxels().fold((u16::MAX, 0), |(lo, hi), v| (lo.min(v.cell[a]), hi.max(v.cell[a])));
         u32::from(hi - lo) + 1
     });
     let options = VoxelizeOptions {
@@ -71,7 +71,7 @@ fn assert_files_hold(saved: &Saved, model: &VoxelModel, hollow: bool) {
     };
     let back = voxel_core::voxelize(&soup, &options).unwrap();
     assert_eq!(back.spec.dims, sides);
-    assert_eq!(back.voxels.len(), model.voxels.len(), "the .glb voxelizes back to the cells shown");
+    assert_eq!(back.len(), model.len(), "the .glb voxelizes back to the cells shown");
 }
 
 #[test]
@@ -91,8 +91,8 @@ fn ctrl_s_saves_the_hollow_model_shown_as_vox_and_glb() {
     let [nx, ny, nz] = model.spec.dims;
     assert_eq!(saved.vox.0, dir.join(format!("donut-{nx}x{ny}x{nz}.vox")));
     assert_eq!(saved.glb.0, dir.join(format!("donut-{nx}x{ny}x{nz}.glb")));
-    assert!(model.voxels.len() < model.stats.voxels, "hollow: {} of {} voxels", model.voxels.len(), model.stats.voxels);
-    assert_eq!(model.voxels.len(), model.stats.visible);
+    assert!(model.len() < model.stats.voxels, "hollow: {} of {} voxels", model.len(), model.stats.voxels);
+    assert_eq!(model.len(), model.stats.visible);
     assert_files_hold(&saved, &model, true);
     let message = ExportStatus::Saved(saved.clone()).message().unwrap();
     assert!(message.contains(&saved.glb.0.display().to_string()), "{message}");
@@ -108,7 +108,7 @@ fn an_export_request_saves_solid_lego_cells() {
         panic!("{:?}", app.world().resource::<ExportStatus>())
     };
     let model = shown(&app);
-    assert_eq!(model.voxels.len(), model.stats.voxels, "solid: every voxel");
+    assert_eq!(model.len(), model.stats.voxels, "solid: every voxel");
     assert!((model.spec.cell[1] / model.spec.cell[0] - 1.2).abs() < 1e-4, "Lego cells: {:?}", model.spec.cell);
     assert_files_hold(&saved, &model, false);
 }

@@ -76,8 +76,7 @@ fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
     // The pile lies under the model.
     let model = shown_model(&app).unwrap();
     let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
-    let model_com =
-        model.voxels.iter().map(|v| turn * Vec3::from(model.center(v))).sum::<Vec3>() / model.voxels.len() as f32;
+    let model_com = model.voxels().map(|v| turn * Vec3::from(model.center(&v))).sum::<Vec3>() / model.len() as f32;
     let pile_com = pile.positions.iter().sum::<Vec3>() / pile.positions.len() as f32;
     let sideways = Vec2::new(pile_com.x - model_com.x, pile_com.z - model_com.z).length();
     assert!(sideways < 1.0, "the pile's centre is {sideways} from under the model's");

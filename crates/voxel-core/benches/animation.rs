@@ -22,14 +22,9 @@ const FRAMES: usize = 60;
 #[path = "../tests/support/models.rs"]
 mod models;
 
-/// Nanoseconds this process's threads have run on a CPU (Linux), `None` elsewhere.
-fn cpu_ns() -> Option<u64> {
-    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
-    let on_cpu = |task: std::fs::DirEntry| -> Option<u64> {
-        std::fs::read_to_string(task.path().join("schedstat")).ok()?.split_whitespace().next()?.parse().ok()
-    };
-    Some(tasks.flatten().filter_map(on_cpu).sum())
-}
+#[path = "../tests/support/cpu.rs"]
+mod cpu;
+use cpu::cpu_ns;
 
 fn median(mut times: Vec<f64>) -> f64 {
     times.sort_by(f64::total_cmp);

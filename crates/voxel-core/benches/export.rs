@@ -69,7 +69,7 @@ fn main() {
         let [nx, ny, nz] = model.spec.dims;
         println!(
             "| {file} | {r} | {nx}×{ny}×{nz} | {} | {} | {} | {} | {} | {} | {wall:.1} ({cpu:.1}) | {greedy_wall:.1} ({greedy_cpu:.1}) |",
-            model.voxels.len(),
+            model.len(),
             s.faces,
             2 * s.faces,
             s.quads,

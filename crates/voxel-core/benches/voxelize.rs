@@ -16,7 +16,7 @@
 //! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
 
 use std::hash::{Hash, Hasher};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use voxel_core::shapes::cuboid;
@@ -25,6 +25,10 @@ use voxel_core::{FillMode, GridSize, Method, TriangleSoup, VoxelizeOptions, load
 
 #[path = "../tests/support/models.rs"]
 mod models;
+
+#[path = "../tests/support/corpus.rs"]
+mod corpus;
+use corpus::corpus;
 
 /// Median wall time in ms of `runs` voxelizations, and the voxel count.
 fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize) {
@@ -35,7 +39,7 @@ fn time(soup: &TriangleSoup, r: u32, method: Method, runs: usize) -> (f64, usize
         let t = Instant::now();
         let m = voxelize(soup, &options).expect("voxelize");
         times.push(t.elapsed().as_secs_f64() * 1e3);
-        voxels = m.voxels.len();
+        voxels = m.len();
     }
     times.sort_by(f64::total_cmp);
     (times[times.len() / 2], voxels)
@@ -84,18 +88,6 @@ fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
     }
 }
 
-/// The models of the corpus folder and its subfolders, sorted.
-fn corpus(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = voxel_core::inputs::expand_inputs(&[dir.to_path_buf()]);
-    for sub in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-        if sub.path().is_dir() {
-            files.extend(voxel_core::inputs::expand_inputs(&[sub.path()]));
-        }
-    }
-    files.sort();
-    files
-}
-
 /// Calls `f` with the name (relative to `dir`) and soup of every model of `files` that loads.
 fn for_each_model(files: &[PathBuf], dir: &std::path::Path, f: impl Fn(&str, &TriangleSoup)) {
     for file in files {
@@ -138,7 +130,7 @@ fn main() {
         let mut hashers = vec![std::hash::DefaultHasher::new(); resolutions.len()];
         for _ in 0..n.parse().expect("N") {
             for (r, hasher) in resolutions.iter().zip(&mut hashers) {
-                voxelize(&soup, &options(r)).expect("voxelize").voxels.hash(hasher);
+                voxelize(&soup, &options(r)).expect("voxelize").voxels().for_each(|v| v.hash(hasher));
             }
         }
         for (r, hasher) in resolutions.iter().zip(&hashers) {

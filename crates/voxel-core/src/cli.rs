@@ -213,7 +213,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             surface: s.surface,
             visible: s.visible,
             colors: s.colors,
-            output_voxels: model.voxels.len(),
+            output_voxels: model.len(),
             load_ms,
             voxelize_ms,
             exported,
@@ -228,7 +228,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             s.voxels,
             s.surface,
             s.visible,
-            model.voxels.len(),
+            model.len(),
             s.colors
         ))
     }

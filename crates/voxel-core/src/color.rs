@@ -1,11 +1,18 @@
 //! Colour: sampling a material at a point of a triangle, sRGB ↔ linear, and the article's pastel remap.
 
+use std::sync::LazyLock;
+
 use crate::soup::TriangleSoup;
 
 /// sRGB-encoded 8-bit component → linear.
 pub fn srgb_to_linear(c: u8) -> f32 {
-    let c = f32::from(c) / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    static TABLE: LazyLock<[f32; 256]> = LazyLock::new(|| {
+        std::array::from_fn(|c| {
+            let c = c as f32 / 255.0;
+            if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+        })
+    });
+    TABLE[usize::from(c)]
 }
 
 /// Linear component → sRGB-encoded 8-bit.

@@ -34,11 +34,12 @@ use crate::bvh::TriangleBvh;
 use crate::geom::{GridTriangle, covers_column, depth_at};
 use crate::grid::{BitGrid, GridSpec};
 use crate::orient::{Role, closed_parts, winding_roles};
+use crate::radix;
 use crate::soup::TriangleSoup;
 use crate::voxelize::{FillMode, Method};
 
 /// One crossing of a +Z column (`column = x * ny + y`) with a triangle, at depth `z`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Crossing {
     /// The column.
     pub column: u32,
@@ -104,7 +105,7 @@ fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
 /// consistent tie-break of [`covers_column`].
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
-    let mut crossings: Vec<Crossing> = tris
+    let crossings: Vec<Crossing> = tris
         .par_chunks(2048)
         .enumerate()
         .flat_map_iter(|(chunk_index, chunk)| {
@@ -125,8 +126,12 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
             out
         })
         .collect();
-    crossings.par_sort_unstable_by(crossing_order);
-    Columns::from_sorted(spec.dims[0] as usize * ny as usize, crossings)
+    // Made triangle-major: a stable sort by column keeps the triangles' order, then each column's few
+    // crossings are sorted by depth.
+    let count = spec.dims[0] as usize * ny as usize;
+    let mut crossings = radix::sort_by_key(crossings, radix::bits_for(count), |c| c.column);
+    crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
+    Columns::from_sorted(count, crossings)
 }
 
 /// Every column crossing, column-major: one BVH query per column (a box around the column's line).

@@ -60,14 +60,23 @@ pub fn depth_at(t: &GridTriangle, p: [f64; 2]) -> f64 {
     z.clamp(a.z.min(b.z).min(c.z), a.z.max(b.z).max(c.z))
 }
 
-/// A triangle prepared for many box-overlap tests against unit cells (separating axis test of
-/// Akenine-Möller; the edges and normal are computed once).
+/// A triangle prepared for many box-overlap tests against cells (separating axis test of Akenine-Möller).
+///
+/// Everything that depends only on the triangle is computed once: its extent along the box axes, its plane,
+/// and for each of the nine edge × box-axis directions that is not zero, the direction and the range of the
+/// triangle's corners projected on it. A test then projects only the box centre. Grid coordinates are
+/// multiples of a power-of-two step with at most about 20 significant bits, so these products and sums are
+/// exact in f64 and give the same answers as projecting each corner relative to the box centre.
 pub struct BoxTester {
-    v: [DVec3; 3],
-    edges: [DVec3; 3],
+    lo: DVec3,
+    hi: DVec3,
     normal: DVec3,
     /// n · v0: the plane offset.
     plane: f64,
+    /// The non-zero edge × axis directions (the first `axis_count`), with the range of the corners'
+    /// projections on each.
+    axes: [(DVec3, f64, f64); 9],
+    axis_count: usize,
 }
 
 impl BoxTester {
@@ -75,37 +84,51 @@ impl BoxTester {
     pub fn new(t: &GridTriangle) -> Self {
         let edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
         let normal = edges[0].cross(edges[1]);
-        Self { v: *t, edges, normal, plane: normal.dot(t[0]) }
+        let mut axes = [(DVec3::ZERO, 0.0, 0.0); 9];
+        let mut axis_count = 0;
+        for e in edges {
+            // The cross products of the edge with the x, y and z axes.
+            for axis in [DVec3::new(0.0, -e.z, e.y), DVec3::new(e.z, 0.0, -e.x), DVec3::new(-e.y, e.x, 0.0)] {
+                if axis != DVec3::ZERO {
+                    let p = t.map(|v| axis.dot(v));
+                    axes[axis_count] = (axis, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+                    axis_count += 1;
+                }
+            }
+        }
+        Self {
+            lo: t[0].min(t[1]).min(t[2]),
+            hi: t[0].max(t[1]).max(t[2]),
+            normal,
+            plane: normal.dot(t[0]),
+            axes,
+            axis_count,
+        }
     }
 
     /// Whether the triangle overlaps the box of half size `half` around `center` (touching counts).
     pub fn overlaps(&self, center: DVec3, half: DVec3) -> bool {
-        let [v0, v1, v2] = self.v.map(|v| v - center);
-        // The box's own axes.
-        for a in 0..3 {
-            if v0[a].min(v1[a]).min(v2[a]) > half[a] || v0[a].max(v1[a]).max(v2[a]) < -half[a] {
-                return false;
-            }
-        }
-        // The triangle's plane.
-        let n = self.normal;
-        let r = half.x * n.x.abs() + half.y * n.y.abs() + half.z * n.z.abs();
-        if (self.plane - n.dot(center)).abs() > r {
+        self.overlaps_plane(center, half) && self.overlaps_inside_edges(center, half)
+    }
+
+    /// The box-axis and plane tests alone: whether the triangle's bounding box and its plane meet the box.
+    /// When the box's projection along the triangle's dominant axis lies inside the triangle's projection,
+    /// no edge direction can separate them and this is the whole test.
+    pub fn overlaps_plane(&self, center: DVec3, half: DVec3) -> bool {
+        if (self.lo - center).cmpgt(half).any() || (self.hi - center).cmplt(-half).any() {
             return false;
         }
-        // The nine edge × box-axis cross products, written out: for axis X and edge e the separating
-        // direction is (0, −e.z, e.y), and so on.
-        let separated = |p: [f64; 3], r: f64| p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r;
-        for e in self.edges {
-            let (ax, ay, az) = (e.x.abs(), e.y.abs(), e.z.abs());
-            if separated([v0, v1, v2].map(|v| -e.z * v.y + e.y * v.z), half.y * az + half.z * ay)
-                || separated([v0, v1, v2].map(|v| e.z * v.x - e.x * v.z), half.x * az + half.z * ax)
-                || separated([v0, v1, v2].map(|v| -e.y * v.x + e.x * v.y), half.x * ay + half.y * ax)
-            {
-                return false;
-            }
-        }
-        true
+        let n = self.normal;
+        (self.plane - n.dot(center)).abs() <= half.dot(n.abs())
+    }
+
+    /// The edge × box-axis tests alone.
+    fn overlaps_inside_edges(&self, center: DVec3, half: DVec3) -> bool {
+        self.axes[..self.axis_count].iter().all(|&(axis, lo, hi)| {
+            let c = axis.dot(center);
+            let r = half.dot(axis.abs());
+            lo - c <= r && hi - c >= -r
+        })
     }
 }
 

@@ -295,6 +295,50 @@ impl BitGrid {
         }
     }
 
+    /// The `n` (≤ 64) cells from `start` as the low bits of a word (cell `start` in bit 0).
+    #[inline]
+    pub fn bits(&self, start: usize, n: usize) -> u64 {
+        debug_assert!(n <= 64 && start + n <= self.len);
+        if n == 0 {
+            return 0;
+        }
+        let (w, b) = (start / 64, start % 64);
+        let mut word = self.words[w] >> b;
+        if b != 0 && w + 1 < self.words.len() {
+            word |= self.words[w + 1] << (64 - b);
+        }
+        if n == 64 { word } else { word & ((1u64 << n) - 1) }
+    }
+
+    /// The maximal runs of set cells within `range`, ascending, as ranges of cell indices (a run stops at
+    /// the range's ends).
+    pub fn runs(&self, range: std::ops::Range<usize>) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let end = range.end;
+        let mut at = range.start;
+        std::iter::from_fn(move || {
+            let start = self.next(at, end, true);
+            if start == end {
+                return None;
+            }
+            at = self.next(start, end, false);
+            Some(start..at)
+        })
+    }
+
+    /// The first cell at or after `from` (and before `end`, else `end`) whose bit is `set`.
+    fn next(&self, mut from: usize, end: usize, set: bool) -> usize {
+        while from < end {
+            let n = (64 - from % 64).min(end - from);
+            let word = self.bits(from, n);
+            let hits = if set { word } else { !word & if n == 64 { u64::MAX } else { (1u64 << n) - 1 } };
+            if hits != 0 {
+                return from + hits.trailing_zeros() as usize;
+            }
+            from += n;
+        }
+        end
+    }
+
     /// Indices of the set cells, ascending.
     pub fn ones(&self) -> impl Iterator<Item = usize> + '_ {
         self.words.iter().enumerate().flat_map(|(w, &word)| {
@@ -361,5 +405,20 @@ mod tests {
         assert_eq!(b.count_range(1..128), 2);
         assert_eq!(b.count_range(0..130), 5);
         assert_eq!(b.ones().collect::<Vec<_>>(), vec![0, 64, 127, 128, 129]);
+    }
+
+    #[test]
+    fn bit_grid_reads_words_and_runs_across_word_boundaries() {
+        let mut b = BitGrid::new(200);
+        b.set_range(60..70);
+        b.set_range(100..164);
+        b.set(199);
+        assert_eq!(b.bits(60, 10), 0b11_1111_1111);
+        assert_eq!(b.bits(58, 4), 0b1100);
+        assert_eq!(b.bits(100, 64), u64::MAX);
+        assert_eq!(b.bits(136, 64), ((1u64 << 28) - 1) | (1 << 63));
+        assert_eq!(b.runs(0..200).collect::<Vec<_>>(), vec![60..70, 100..164, 199..200]);
+        assert_eq!(b.runs(65..120).collect::<Vec<_>>(), vec![65..70, 100..120]);
+        assert_eq!(b.runs(70..100).count(), 0);
     }
 }

@@ -23,10 +23,13 @@ pub mod glb;
 pub mod grid;
 pub mod import;
 pub mod inputs;
+pub mod model;
 mod orient;
+mod radix;
 pub mod shapes;
 mod shell;
 pub mod soup;
+mod visible;
 pub mod vox;
 pub mod voxelize;
 

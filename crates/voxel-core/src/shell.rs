@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use crate::geom::{BoxTester, GridTriangle};
 use crate::grid::{BitGrid, GridSpec};
+use crate::radix;
 
 mod octree;
 pub(crate) use octree::ShellOctree;
@@ -27,9 +28,14 @@ impl Shell {
     /// The triangles overlapping cell `index` (empty when it is not a shell cell).
     pub fn triangles_of(&self, index: usize) -> &[u32] {
         match self.cells.binary_search(&(index as u32)) {
-            Ok(k) => &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize],
+            Ok(k) => self.triangles_at(k),
             Err(_) => &[],
         }
+    }
+
+    /// The triangles overlapping the `k`-th shell cell, `cells[k]`.
+    pub fn triangles_at(&self, k: usize) -> &[u32] {
+        &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize]
     }
 }
 
@@ -50,6 +56,59 @@ fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bo
     spec.step(c, step).is_some_and(|n| fill.get(spec.index(n[0], n[1], n[2])))
 }
 
+/// How much of the triangle–box test a candidate cell needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Test {
+    /// No test: the cell's footprint lies outside the triangle's projection.
+    Outside,
+    /// None: the cell holds the whole triangle.
+    Known,
+    /// The box axes and the plane: the cell's footprint lies inside the triangle's projection.
+    Plane,
+    /// The whole separating axis test.
+    Full,
+}
+
+/// Where a unit square of the plane across a triangle's dominant axis lies against the triangle's projection
+/// on that plane, by a margin far above rounding. Inside, no edge of the triangle passes over the square, and
+/// a cell above it overlaps the triangle exactly when the triangle's plane crosses the cell; outside, no cell
+/// above it overlaps the triangle.
+struct FootprintTest {
+    /// Per edge: its start (u, v), its direction (du, dv) times the projection's orientation, and the
+    /// smallest value its edge function must exceed at a square's centre.
+    edges: [([f64; 2], [f64; 2], f64); 3],
+}
+
+impl FootprintTest {
+    /// Prepares triangle `t` projected on axes `u` and `v`; `orientation` is the sign of its projected area.
+    fn new(t: &GridTriangle, orientation: f64, u: usize, v: usize) -> Self {
+        let edges = [0, 1, 2].map(|k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let dir = [(b[u] - a[u]) * orientation, (b[v] - a[v]) * orientation];
+            // The edge function's drop from a square's centre to its worst corner, plus a margin.
+            let reach = 0.5 * (dir[0].abs() + dir[1].abs());
+            ([a[u], a[v]], dir, reach * (1.0 + 1e-9) + 1e-9)
+        });
+        Self { edges }
+    }
+
+    /// Where the square [iu, iu + 1] × [iv, iv + 1] lies: strictly inside, strictly outside one edge (then
+    /// that edge's direction × the dominant axis separates the triangle from every cell above the square),
+    /// or across an edge, each with the margin.
+    fn place(&self, iu: u32, iv: u32) -> Test {
+        let (cu, cv) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5);
+        let mut inside = true;
+        for &(a, dir, reach) in &self.edges {
+            let e = dir[0] * (cv - a[1]) - dir[1] * (cu - a[0]);
+            if e < -reach {
+                return Test::Outside;
+            }
+            inside &= e > reach;
+        }
+        if inside { Test::Plane } else { Test::Full }
+    }
+}
+
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
@@ -68,13 +127,23 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
     // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
     let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
-    // The last cell that the extent [from, to] along axis `a` reaches with positive length.
-    let last_cell_of =
-        |a: usize, from: f64, to: f64| cell_of(a, if to > from && to == to.floor() { to - 1.0 } else { to });
-    let tester = BoxTester::new(t);
-    let mut emit = |c: [u32; 3], exact: bool| {
+    // The last cell that the extent [from, to] along axis `a` reaches with positive length. (`to` is a whole
+    // number when the round trip through i64 keeps it; beyond i64's range, `to − 1` is `to` anyway.)
+    let whole = |to: f64| to == (to as i64) as f64;
+    let last_cell_of = |a: usize, from: f64, to: f64| cell_of(a, if to > from && whole(to) { to - 1.0 } else { to });
+    // Only triangles with candidate cells near their edges need the full test.
+    let tester = std::cell::OnceCell::new();
+    let tester = || tester.get_or_init(|| BoxTester::new(t));
+    let mut emit = |c: [u32; 3], test: Test| {
         let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-        if !exact && !tester.overlaps(center, DVec3::splat(0.5)) {
+        let half = DVec3::splat(0.5);
+        let overlaps = match test {
+            Test::Outside => false,
+            Test::Known => true,
+            Test::Plane => tester().overlaps_plane(center, half),
+            Test::Full => tester().overlaps(center, half),
+        };
+        if !overlaps {
             return;
         }
         let index = spec.index(c[0], c[1], c[2]);
@@ -84,7 +153,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
     if lo_cell == [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])) {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
-        emit(lo_cell, true);
+        emit(lo_cell, Test::Known);
         return;
     }
     let an = n.abs();
@@ -96,8 +165,13 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         2
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
+    let inside = FootprintTest::new(t, n[d].signum(), u, v);
     for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
         for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
+            let test = inside.place(iu, iv);
+            if test == Test::Outside {
+                continue;
+            }
             // Extent of the plane along the dominant axis over this cell's footprint.
             let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
             let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
@@ -117,7 +191,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
                 c[u] = iu;
                 c[v] = iv;
                 c[d] = id;
-                emit(c, false);
+                emit(c, test);
             }
         }
     }
@@ -125,7 +199,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
 
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let mut pairs: Vec<u64> = (0..tris.len())
+    let pairs: Vec<u64> = (0..tris.len())
         .into_par_iter()
         .fold(Vec::new, |mut out, tri| {
             overlaps(spec, tris, tri, fill, &mut out);
@@ -135,7 +209,8 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
             a.append(&mut b);
             a
         });
-    pairs.par_sort_unstable();
+    // The fold and reduce keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
+    let pairs = radix::sort_by_key(pairs, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
     // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
     let mut shell = Shell { offsets: vec![0], tris: Vec::with_capacity(pairs.len()), ..Shell::default() };
     for p in pairs {
@@ -159,6 +234,47 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
+        let mut state = 7u64;
+        let mut next = |scale: f64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * scale
+        };
+        let (mut inside_cells, mut outside_cells) = (0, 0);
+        for _ in 0..200 {
+            let t: GridTriangle = std::array::from_fn(|_| DVec3::new(next(12.0), next(12.0), next(12.0)));
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let an = n.abs();
+            let d = if an.x >= an.y && an.x >= an.z {
+                0
+            } else if an.y >= an.z {
+                1
+            } else {
+                2
+            };
+            let (u, v) = ((d + 1) % 3, (d + 2) % 3);
+            let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&t, n[d].signum(), u, v));
+            for (iu, iv, id) in (0..12).flat_map(|a| (0..12).flat_map(move |b| (0..12).map(move |c| (a, b, c)))) {
+                let mut c = DVec3::ZERO;
+                (c[u], c[v], c[d]) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5, f64::from(id) + 0.5);
+                let half = DVec3::splat(0.5);
+                match inside.place(iu, iv) {
+                    Test::Plane => {
+                        inside_cells += 1;
+                        assert_eq!(tester.overlaps(c, half), tester.overlaps_plane(c, half), "{t:?} at {c}");
+                    }
+                    Test::Outside => {
+                        outside_cells += 1;
+                        assert!(!tester.overlaps(c, half), "{t:?} at {c}");
+                    }
+                    _ => {}
+                }
+            }
+        }
+        assert!(inside_cells > 10_000 && outside_cells > 10_000, "{inside_cells} inside, {outside_cells} outside");
+    }
 
     #[test]
     fn normal_steps_pick_dominant_components() {

@@ -94,13 +94,13 @@ pub struct VoxSummary {
 /// Converts a voxel model to MagicaVoxel data (z up: our y becomes MagicaVoxel's z).
 pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
     let mut histogram = BTreeMap::new();
-    for v in &model.voxels {
+    for v in model.voxels() {
         *histogram.entry([v.color[0], v.color[1], v.color[2]]).or_insert(0usize) += 1;
     }
     let (palette, index) = quantize(&histogram, MAX_COLORS);
     // Group voxels into 256³ blocks, in block order.
     let mut blocks: BTreeMap<[u32; 3], Vec<VoxVoxel>> = BTreeMap::new();
-    for v in &model.voxels {
+    for v in model.voxels() {
         let (x, y, z) = (u32::from(v.cell[0]), u32::from(v.cell[2]), u32::from(v.cell[1]));
         let key = [x / MAX_MODEL_EDGE, y / MAX_MODEL_EDGE, z / MAX_MODEL_EDGE];
         blocks.entry(key).or_default().push(VoxVoxel {
@@ -145,7 +145,7 @@ pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
     }
     let mut colors: Vec<Color> = palette.iter().map(|c| Color { r: c[0], g: c[1], b: c[2], a: 255 }).collect();
     colors.resize(256, Color { r: 0, g: 0, b: 0, a: 255 });
-    let summary = VoxSummary { models: models.len(), colors: palette.len(), voxels: model.voxels.len() };
+    let summary = VoxSummary { models: models.len(), colors: palette.len(), voxels: model.len() };
     let data = DotVoxData {
         version: 150,
         index_map: dot_vox::DEFAULT_INDEX_MAP.to_vec(),

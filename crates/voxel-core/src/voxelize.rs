@@ -1,6 +1,5 @@
 //! The voxelization pipeline: normalize → fill → shell → combine → colour → (hollow).
 
-use std::collections::HashSet;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -11,10 +10,14 @@ use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
-use crate::geom::{GridTriangle, closest_point_barycentric, distance2};
+use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
 use crate::grid::{BitGrid, GridSize, GridSpec};
+use crate::radix;
 use crate::shell::{Shell, ShellOctree, shell};
 use crate::soup::TriangleSoup;
+use crate::visible::visible_cells;
+
+pub use crate::model::{Voxel, VoxelModel, VoxelStats};
 
 /// How the inside of the model is found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -101,56 +104,6 @@ impl Default for VoxelizeOptions {
     }
 }
 
-/// One filled cell.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Voxel {
-    /// Cell coordinates (x, y, z).
-    pub cell: [u16; 3],
-    /// sRGB RGBA8 colour.
-    pub color: [u8; 4],
-    /// Index of the source part (glTF primitive instance) the colour came from.
-    pub part: u32,
-    /// Whether the cell has an empty face neighbour (can be seen from outside).
-    pub visible: bool,
-}
-
-/// Counts describing a voxelization.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct VoxelStats {
-    /// Triangles in the model.
-    pub triangles: usize,
-    /// Grid size in cells.
-    pub grid: [u32; 3],
-    /// Filled cells (solid, before any hollowing).
-    pub voxels: usize,
-    /// Cells a triangle touches (the surface shell).
-    pub surface: usize,
-    /// Filled cells with an empty face neighbour.
-    pub visible: usize,
-    /// Distinct colours among the output voxels.
-    pub colors: usize,
-}
-
-/// A voxelized model: the grid placement and the output voxels, ascending by (x, y, z).
-#[derive(Clone, Debug, PartialEq)]
-pub struct VoxelModel {
-    /// Where the grid sits in normalized model space.
-    pub spec: GridSpec,
-    /// The voxels (only visible ones when hollowed).
-    pub voxels: Vec<Voxel>,
-    /// Counts.
-    pub stats: VoxelStats,
-    /// Names of the source parts (index = `Voxel::part`).
-    pub parts: Vec<String>,
-}
-
-impl VoxelModel {
-    /// Model-space centre of a voxel.
-    pub fn center(&self, v: &Voxel) -> [f32; 3] {
-        self.spec.cell_center(v.cell.map(u32::from))
-    }
-}
-
 /// Voxelizes `soup` with `options`.
 pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
     voxelize_timed(soup, options).map(|(model, _)| model)
@@ -216,7 +169,6 @@ fn voxelize_within_timed(
     if options.pastel {
         colors.par_iter_mut().for_each(|(c, _)| *c = pastel(*c));
     }
-    let voxels = assemble(&spec, &solid, &visible, &colors, options.hollow);
     let stats = VoxelStats {
         triangles: soup.triangle_count(),
         grid: spec.dims,
@@ -224,22 +176,40 @@ fn voxelize_within_timed(
         surface: shell.cells.len(),
         visible: visible.len(),
         // Interior voxels copy visible ones, so the visible cells hold every colour.
-        colors: colors.iter().map(|c| c.0).collect::<HashSet<_>>().len(),
+        colors: distinct(colors.iter().map(|c| u32::from_le_bytes(c.0)).collect()),
     };
-    Ok((VoxelModel { spec, voxels, stats, parts: soup.parts.iter().map(|p| p.name.clone()).collect() }, times))
+    let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
+    let solid = (!options.hollow).then_some(solid);
+    Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
+}
+
+/// The number of distinct values.
+fn distinct(mut values: Vec<u32>) -> usize {
+    // Neighbouring cells often share a colour: drop repeats before sorting.
+    values.dedup();
+    let mut values = radix::sort_by_key(values, u32::BITS, |&v| v);
+    values.dedup();
+    values.len()
 }
 
 /// The solid cells from the fill and the shell, per the modes.
 fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell) -> BitGrid {
-    let mut shell_bits = BitGrid::new(spec.cell_count());
-    for &c in &shell.cells {
-        shell_bits.set(c as usize);
-    }
+    let shell_bits = || {
+        let mut bits = BitGrid::new(spec.cell_count());
+        for &c in &shell.cells {
+            bits.set(c as usize);
+        }
+        bits
+    };
     match options.fill {
         FillMode::Winding | FillMode::Parity => {
             let mut solid = fill;
             match options.shell {
-                ShellMode::All => solid.union_with(&shell_bits),
+                ShellMode::All => {
+                    for &c in &shell.cells {
+                        solid.set(c as usize);
+                    }
+                }
                 ShellMode::Auto => {
                     for (k, &c) in shell.cells.iter().enumerate() {
                         if shell.thin[k] {
@@ -252,6 +222,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             solid
         }
         FillMode::Flood => {
+            let shell_bits = shell_bits();
             let outside = reachable_from_outside(spec, &shell_bits);
             let mut solid = BitGrid::new(spec.cell_count());
             for i in 0..spec.cell_count() {
@@ -261,48 +232,54 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             }
             solid
         }
-        FillMode::None => shell_bits,
+        FillMode::None => shell_bits(),
     }
-}
-
-/// Runs the per-column closure over every (x, y) column in parallel, concatenating results in order.
-fn per_column<T: Send>(spec: &GridSpec, f: impl Fn(u32, u32, usize) -> Vec<T> + Sync + Send) -> Vec<T> {
-    let [nx, ny, nz] = spec.dims;
-    (0..nx * ny).into_par_iter().flat_map_iter(|col| f(col / ny, col % ny, col as usize * nz as usize)).collect()
-}
-
-/// Solid cells with an empty face neighbour (the grid's outside counts as empty), ascending.
-fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
-    let [nx, ny, nz] = spec.dims;
-    let (sx, sy) = (ny as usize * nz as usize, nz as usize);
-    per_column(spec, |x, y, base| {
-        let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
-        (0..nz as usize)
-            .map(|z| base + z)
-            .filter(|&i| {
-                solid.get(i)
-                    && (side_open
-                        || i == base
-                        || i + 1 == base + nz as usize
-                        || !solid.get(i - 1)
-                        || !solid.get(i + 1)
-                        || !solid.get(i - sx)
-                        || !solid.get(i + sx)
-                        || !solid.get(i - sy)
-                        || !solid.get(i + sy))
-            })
-            .map(|i| i as u32)
-            .collect()
-    })
 }
 
 /// The steps to the six face neighbours.
 const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]];
 
-/// The nearest triangle to grid point `p` among `candidates` (ties: lower index).
-fn nearest_among(tris: &[GridTriangle], p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<usize> {
-    candidates.map(|t| (t, distance2(p, &tris[t]))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0))).map(|n| n.0)
+/// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
+/// weights of its closest point.
+fn nearest_among(
+    tris: &[GridTriangle],
+    p: DVec3,
+    candidates: impl Iterator<Item = usize>,
+) -> Option<(usize, [f64; 3])> {
+    let mut best: Option<(usize, f64, [f64; 3])> = None;
+    for t in candidates {
+        let w = closest_point_barycentric(p, &tris[t]);
+        let d = point_at(&tris[t], w).distance_squared(p);
+        if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {
+            best = Some((t, d, w));
+        }
+    }
+    best.map(|(t, _, w)| (t, w))
 }
+
+/// The position of `target` in the ascending `cells`, if there, searched outwards from position `k` (a
+/// galloping search: the cost grows with the log of the distance).
+fn position_near(cells: &[u32], k: usize, target: u32) -> Option<usize> {
+    let (mut lo, mut hi) = (k.min(cells.len()), k.min(cells.len()));
+    let mut step = 1;
+    if cells.get(k).is_some_and(|&c| c < target) {
+        while hi < cells.len() && cells[hi] < target {
+            (lo, hi) = (hi, (hi + step).min(cells.len()));
+            step *= 2;
+        }
+    } else {
+        while lo > 0 && cells[lo - 1] >= target {
+            (hi, lo) = (lo, lo.saturating_sub(step));
+            step *= 2;
+        }
+    }
+    // Now cells[..lo] < target and cells[hi..] >= target or hi is the end.
+    let at = lo + cells[lo..hi].partition_point(|&c| c < target);
+    (cells.get(at) == Some(&target)).then_some(at)
+}
+
+/// Visible cells handed to one task of the colour pass.
+const CELLS_PER_TASK: usize = 1024;
 
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
@@ -324,14 +301,23 @@ fn surface_colors(
         let c = spec.coords(i as usize);
         DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
     };
-    let shell_triangles = |cell: usize| shell.triangles_of(cell).iter().map(|&t| t as usize);
-    let mut nearest: Vec<Option<usize>> = visible
-        .par_iter()
-        .map(|&i| {
-            let p = centre(i);
-            nearest_among(tris, p, shell_triangles(i as usize)).or_else(|| {
-                let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
-                nearest_among(tris, p, faces.flat_map(shell_triangles))
+    // Visible and shell cells are both ascending: each task walks the two lists side by side, and finds a
+    // neighbour's shell cell by galloping from where the walk is.
+    let mut nearest: Vec<Option<(usize, [f64; 3])>> = visible
+        .par_chunks(CELLS_PER_TASK)
+        .flat_map_iter(|chunk| {
+            let mut k = shell.cells.partition_point(|&c| c < chunk[0]);
+            chunk.iter().map(move |&i| {
+                while shell.cells.get(k).is_some_and(|&c| c < i) {
+                    k += 1;
+                }
+                let own: &[u32] = if shell.cells.get(k) == Some(&i) { shell.triangles_at(k) } else { &[] };
+                let p = centre(i);
+                nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
+                    let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
+                    let near = faces.filter_map(|n| position_near(&shell.cells, k, n as u32));
+                    nearest_among(tris, p, near.flat_map(|at| shell.triangles_at(at).iter().map(|&t| t as usize)))
+                })
             })
         })
         .collect();
@@ -347,77 +333,35 @@ fn surface_colors(
             let octree = ShellOctree::new(spec, shell);
             Box::new(move |p| octree.nearest(tris, p))
         };
-        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| *t = far(centre(i)));
+        nearest.par_iter_mut().zip(visible).filter(|(t, _)| t.is_none()).for_each(|(t, &i)| {
+            *t = far(centre(i)).map(|t| (t, closest_point_barycentric(centre(i), &tris[t])));
+        });
     }
-    visible
+    nearest
         .par_iter()
-        .zip(&nearest)
-        .map(|(&i, &t)| match t {
-            Some(t) => (sample(soup, t, closest_point_barycentric(centre(i), &tris[t])), soup.triangle_parts[t]),
+        .map(|&t| match t {
+            Some((t, w)) => (sample(soup, t, w), soup.triangle_parts[t]),
             None => ([255; 4], 0),
         })
         .collect()
 }
 
-/// Builds the output voxels. An interior cell takes the colour of the nearer end of its solid run
-/// along z (both ends of a run are visible cells): cheap, parallel and deterministic.
-fn assemble(spec: &GridSpec, solid: &BitGrid, visible: &[u32], colors: &[([u8; 4], u32)], hollow: bool) -> Vec<Voxel> {
-    let voxel = |i: usize, (color, part): ([u8; 4], u32), visible: bool| Voxel {
-        cell: spec.coords(i).map(|c| c as u16),
-        color,
-        part,
-        visible,
-    };
-    if hollow {
-        return visible.par_iter().zip(colors).map(|(&i, &c)| voxel(i as usize, c, true)).collect();
-    }
-    let [nx, ny, nz] = spec.dims;
-    let nz = nz as usize;
-    // Size the output once and hand every column its own disjoint slice of it.
-    let counts: Vec<usize> =
-        (0..nx as usize * ny as usize).into_par_iter().map(|col| solid.count_range(col * nz..(col + 1) * nz)).collect();
-    let blank = Voxel { cell: [0; 3], color: [0; 4], part: 0, visible: false };
-    let mut voxels = vec![blank; counts.iter().sum()];
-    let mut rest = voxels.as_mut_slice();
-    let mut slices = Vec::with_capacity(counts.len());
-    for &n in &counts {
-        let (head, tail) = std::mem::take(&mut rest).split_at_mut(n);
-        slices.push(head);
-        rest = tail;
-    }
-    slices.into_par_iter().enumerate().filter(|(_, s)| !s.is_empty()).for_each(|(col, out)| {
-        let base = col * nz;
-        let cell = |z: usize| [(col / ny as usize) as u16, (col % ny as usize) as u16, z as u16];
-        let mut next_visible = visible.partition_point(|&v| (v as usize) < base);
-        let mut written = 0;
-        let mut z = 0;
-        while z < nz {
-            if !solid.get(base + z) {
-                z += 1;
-                continue;
-            }
-            let start = z;
-            while z < nz && solid.get(base + z) {
-                z += 1;
-            }
-            // Both ends of the run are visible; interior cells copy the nearer end.
-            let run_first = next_visible;
-            let run_last = run_first + visible[run_first..].partition_point(|&v| (v as usize) < base + z) - 1;
-            for k in start..z {
-                let on_surface = next_visible < visible.len() && visible[next_visible] as usize == base + k;
-                let source = if on_surface {
-                    next_visible += 1;
-                    next_visible - 1
-                } else if k - start <= z - 1 - k {
-                    run_first
-                } else {
-                    run_last
-                };
-                let (color, part) = colors[source];
-                out[written] = Voxel { cell: cell(k), color, part, visible: on_surface };
-                written += 1;
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn galloping_finds_exactly_the_cells_present_from_any_start() {
+        let cells: Vec<u32> = (0..300).map(|k| k * 8 + k % 7).collect();
+        for k in 0..=cells.len() {
+            for target in 0..cells[cells.len() - 1] + 5 {
+                assert_eq!(
+                    position_near(&cells, k, target),
+                    cells.binary_search(&target).ok(),
+                    "from {k} for {target}"
+                );
             }
         }
-    });
-    voxels
+        assert_eq!(position_near(&[], 0, 4), None);
+    }
 }

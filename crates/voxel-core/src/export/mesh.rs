@@ -6,7 +6,6 @@
 //! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
 //! rectangle of the row before when it spans the same columns in the same colour.
 
-use crate::grid::BitGrid;
 use crate::voxelize::VoxelModel;
 
 /// One rectangle of the surface, all of one colour.
@@ -142,18 +141,14 @@ fn merge(faces: &[(u64, [u8; 3])]) -> Vec<Rect> {
 ///
 /// The faces are those between a voxel of the model and a cell without one, so a hollowed model (visible
 /// voxels only) also gets the walls of its emptied inside; mesh the solid model for the outside alone.
-/// Only voxels flagged [`Voxel::visible`](crate::Voxel::visible) are looked at: the others have no empty
-/// face neighbour.
+/// Only the visible voxels ([`VoxelModel::visible_voxels`]) are looked at: the others have no empty face
+/// neighbour.
 pub fn surface(model: &VoxelModel) -> Surface {
     let spec = &model.spec;
-    let mut filled = BitGrid::new(spec.cell_count());
-    for v in &model.voxels {
-        filled.set(spec.index(u32::from(v.cell[0]), u32::from(v.cell[1]), u32::from(v.cell[2])));
-    }
+    let filled = model.occupancy();
     let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
     let mut faces: [Vec<(u64, [u8; 3])>; 6] = Default::default();
-    // A voxel not flagged visible has six filled face neighbours: it has no face to find.
-    for v in model.voxels.iter().filter(|v| v.visible) {
+    for v in model.visible_voxels() {
         let cell = v.cell.map(u32::from);
         let i = spec.index(cell[0], cell[1], cell[2]);
         let color = [v.color[0], v.color[1], v.color[2]];
@@ -197,7 +192,6 @@ pub(crate) mod tests {
 
     use super::*;
     use crate::grid::GridSpec;
-    use crate::voxelize::Voxel;
 
     /// A model on a grid of 8k × 4k × 8k cells 0.5 wide with the given coloured cells. The grid is fitted
     /// to a box of 2k × k × 2k centred on (10, 0, -4), whose diagonal (3k) is scaled to 6k: the normalization
@@ -208,18 +202,14 @@ pub(crate) mod tests {
         let (lo, hi) = ([10.0 - k, -0.5 * k, -4.0 - k], [10.0 + k, 0.5 * k, -4.0 + k]);
         soup.add_mesh(&crate::shapes::cuboid(lo, hi), [1.0; 4], "box");
         let spec = GridSpec::fit(&soup, 6.0 * k, crate::GridSize::Cell(0.5), 1.0, crate::DEFAULT_MAX_CELLS).unwrap();
-        let voxels = cells
-            .into_iter()
-            .map(|(cell, c)| Voxel { cell, color: [c[0], c[1], c[2], 255], part: 0, visible: true })
-            .collect();
-        VoxelModel { spec, voxels, stats: Default::default(), parts: Vec::new() }
+        VoxelModel::from_cells(spec, cells.into_iter().map(|(cell, c)| (cell, [c[0], c[1], c[2], 255])))
     }
 
     /// Every unit face between a voxel of `model` and a cell without one: (cell, normal) → colour.
     fn faces_by_brute_force(model: &VoxelModel) -> HashMap<([i64; 3], [i32; 3]), [u8; 3]> {
-        let filled: HashSet<[i64; 3]> = model.voxels.iter().map(|v| v.cell.map(i64::from)).collect();
+        let filled: HashSet<[i64; 3]> = model.voxels().map(|v| v.cell.map(i64::from)).collect();
         let mut out = HashMap::new();
-        for v in &model.voxels {
+        for v in model.voxels() {
             let c = v.cell.map(i64::from);
             for axis in 0..3 {
                 for sign in [-1, 1] {
@@ -310,11 +300,7 @@ pub(crate) mod tests {
             &crate::VoxelizeOptions { grid: crate::GridSize::Resolution(20), ..Default::default() },
         )
         .unwrap();
-        for v in &mut m.voxels {
-            if v.cell[1] < 8 {
-                v.color = [10, 200, 30, 255];
-            }
-        }
+        m.recolor(|v| if v.cell[1] < 8 { [10, 200, 30, 255] } else { v.color });
         let s = checked_surface(&m);
         assert!(s.quads.len() * 2 < s.faces, "{} quads for {} faces", s.quads.len(), s.faces);
     }

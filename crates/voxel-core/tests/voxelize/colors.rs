@@ -57,7 +57,7 @@ fn cells_far_from_the_surface_take_the_colour_of_the_nearest_face() {
         assert_eq!(m.stats.voxels, (r * r * r) as usize);
         assert_eq!((soup.triangle_count() < m.stats.surface), splits == 0);
         let mut far = 0;
-        for v in m.voxels.iter().filter(|v| u32::from(v.cell[0]) == r - 1 && v.cell[1] > 0 && v.cell[2] > 0) {
+        for v in m.voxels().filter(|v| u32::from(v.cell[0]) == r - 1 && v.cell[1] > 0 && v.cell[2] > 0) {
             assert!(v.visible);
             let centre = v.cell.map(|c| f64::from(c) + 0.5);
             let mut distances: Vec<(f64, u32)> = faces

@@ -23,14 +23,14 @@ pub fn at_resolution(r: u32) -> VoxelizeOptions {
 
 /// The set of filled cells of a model.
 pub fn cells(model: &VoxelModel) -> HashSet<[u16; 3]> {
-    model.voxels.iter().map(|v| v.cell).collect()
+    model.voxels().map(|v| v.cell).collect()
 }
 
 /// Volume of the model in cells of the fitted grid, relative to an analytic volume in world units.
 pub fn relative_volume(model: &VoxelModel, world_volume: f64) -> f64 {
     let cell = f64::from(model.spec.cell[0]) * f64::from(model.spec.cell[1]) * f64::from(model.spec.cell[2]);
     let scale = f64::from(model.spec.scale);
-    model.voxels.len() as f64 * cell / (world_volume * scale.powi(3))
+    model.len() as f64 * cell / (world_volume * scale.powi(3))
 }
 
 /// Rotates a mesh about x by `angle` and then about z by 0.6·`angle`.

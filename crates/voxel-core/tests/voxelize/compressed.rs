@@ -34,7 +34,7 @@ fn twins(plain: &str, packed: &str) -> Option<(TriangleSoup, TriangleSoup)> {
 }
 
 fn colour_by_cell(m: &VoxelModel) -> HashMap<[u16; 3], [u8; 4]> {
-    m.voxels.iter().map(|v| (v.cell, v.color)).collect()
+    m.voxels().map(|v| (v.cell, v.color)).collect()
 }
 
 #[test]
@@ -45,7 +45,7 @@ fn compressed_twins_give_the_same_cells_within_half_a_percent() {
         for r in [32, 64, 128] {
             let (ma, mb) = (voxelize(&a, &at_resolution(r)).unwrap(), voxelize(&b, &at_resolution(r)).unwrap());
             assert_eq!(ma.stats.grid, mb.stats.grid, "{packed} R={r}: grid");
-            let (na, nb) = (ma.voxels.len(), mb.voxels.len());
+            let (na, nb) = (ma.len(), mb.len());
             println!("{plain} / {packed} R={r}: {na} / {nb} voxels");
             assert!(na > 0 && na.abs_diff(nb) * 200 <= na, "{packed} R={r}: {nb} voxels against {na} uncompressed");
         }

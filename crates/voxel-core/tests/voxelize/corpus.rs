@@ -98,9 +98,9 @@ fn every_loadable_corpus_model_voxelizes_with_default_options() {
         let Some(path) = model(name) else { return };
         let soup = load_file(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         let m = voxelize(&soup, &VoxelizeOptions::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(m.voxels.len() > 100, "{name}: only {} voxels", m.voxels.len());
+        assert!(m.len() > 100, "{name}: only {} voxels", m.len());
         assert!(m.stats.visible <= m.stats.voxels && m.stats.visible > 0);
-        assert_eq!(m.voxels.len(), m.stats.voxels);
+        assert_eq!(m.len(), m.stats.voxels);
     }
 }
 
@@ -111,8 +111,8 @@ fn the_fried_eggs_white_is_kept_at_the_default_grid() {
     let footprint = |shell| {
         let m = voxelize(&soup, &VoxelizeOptions { shell, ..Default::default() }).unwrap();
         // Part 0 is the white (lambert2SG), part 1 the yolk.
-        let white = m.voxels.iter().filter(|v| v.part == 0).count();
-        (m.voxels.iter().map(|v| [v.cell[0], v.cell[2]]).collect::<HashSet<_>>().len(), white)
+        let white = m.voxels().filter(|v| v.part == 0).count();
+        (m.voxels().map(|v| [v.cell[0], v.cell[2]]).collect::<HashSet<_>>().len(), white)
     };
     let (parity_only, _) = footprint(ShellMode::None);
     let (auto, white) = footprint(ShellMode::Auto);
@@ -133,7 +133,7 @@ fn fraction(colors: &[[u8; 4]], pred: impl Fn([f32; 3]) -> bool) -> f64 {
 fn surface_colors(name: &str) -> Option<Vec<[u8; 4]>> {
     let soup = load_file(&model(name)?).unwrap();
     let m = voxelize(&soup, &VoxelizeOptions { hollow: true, ..at_resolution(48) }).unwrap();
-    Some(m.voxels.iter().map(|v| v.color).collect())
+    Some(m.voxels().map(|v| v.color).collect())
 }
 
 #[test]
@@ -181,7 +181,7 @@ fn node_hierarchies_place_every_part() {
     let soup = load_file(&path).unwrap();
     assert_eq!(soup.materials.len(), 5);
     let m = voxelize(&soup, &at_resolution(64)).unwrap();
-    let used: HashSet<_> = m.voxels.iter().map(|v| soup.parts[v.part as usize].material).collect();
+    let used: HashSet<_> = m.voxels().map(|v| soup.parts[v.part as usize].material).collect();
     assert_eq!(used.len(), 5);
 }
 

@@ -24,7 +24,7 @@ fn the_hand_built_cube_loads() {
     let soup = load_slice(&cube_glb(|_, _| {}), None).unwrap();
     assert_eq!(soup.triangle_count(), 12);
     let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(10), ..Default::default() }).unwrap();
-    assert_eq!(m.voxels.len(), 1000);
+    assert_eq!(m.len(), 1000);
 }
 
 #[test]
@@ -162,7 +162,7 @@ fn quantized_positions_with_a_dequantizing_node_scale_load() {
     assert_eq!(lo, [0.0; 3]);
     assert_eq!(hi, [2.0; 3]);
     let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(8), ..Default::default() }).unwrap();
-    assert_eq!(m.voxels.len(), 512);
+    assert_eq!(m.len(), 512);
 }
 
 #[test]
@@ -189,7 +189,7 @@ fn data_uri_buffers_and_triangle_strips_load() {
     let soup = load_slice(&serde_json::to_vec(&doc).unwrap(), None).unwrap();
     assert_eq!(soup.triangle_count(), 2);
     let m = voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(10), ..Default::default() }).unwrap();
-    assert_eq!(m.voxels.len(), 100);
+    assert_eq!(m.len(), 100);
 }
 
 /// The cube with a base-colour texture whose image is `image` (a JSON object) and an extra buffer view

@@ -26,7 +26,7 @@ fn a_small_model_round_trips_with_its_colours() {
     let size = &data.models[0].size;
     // MagicaVoxel is z-up: our (x, y, z) grid becomes (x, z, y).
     assert_eq!([size.x, size.y, size.z], [16, 8, 8]);
-    assert_eq!(data.models[0].voxels.len(), m.voxels.len());
+    assert_eq!(data.models[0].voxels.len(), m.len());
     let colors: HashSet<[u8; 3]> = data.models[0]
         .voxels
         .iter()
@@ -45,13 +45,15 @@ fn big_grids_split_into_several_models_and_many_colours_are_quantized() {
         voxelize(&cube, &VoxelizeOptions { grid: GridSize::Resolution(300), hollow: true, ..Default::default() })
             .unwrap();
     // Give every voxel one of ~4000 colours.
-    for (k, v) in m.voxels.iter_mut().enumerate() {
-        v.color = [(k % 16 * 16) as u8, (k / 16 % 16 * 16) as u8, (k / 256 % 16 * 16) as u8, 255];
-    }
+    let mut k = 0;
+    m.recolor(|_| {
+        k += 1;
+        [(k % 16 * 16) as u8, (k / 16 % 16 * 16) as u8, (k / 256 % 16 * 16) as u8, 255]
+    });
     let (data, summary) = read_back(&m, "big");
     assert_eq!(data.models.len(), 8, "a 300³ grid spans 2×2×2 blocks of 256");
     assert!(data.models.iter().all(|md| md.size.x <= 256 && md.size.y <= 256 && md.size.z <= 256));
-    assert_eq!(data.models.iter().map(|md| md.voxels.len()).sum::<usize>(), m.voxels.len());
+    assert_eq!(data.models.iter().map(|md| md.voxels.len()).sum::<usize>(), m.len());
     assert_eq!(summary.colors, 255);
     let used: HashSet<u8> = data.models.iter().flat_map(|md| md.voxels.iter().map(|v| v.i)).collect();
     assert!(used.len() <= 255 && used.len() > 200);

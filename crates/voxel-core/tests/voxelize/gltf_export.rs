@@ -39,8 +39,8 @@ fn round_trip(name: &str, model: &VoxelModel) -> Result<(), String> {
     let (bytes, stats) = to_glb(model, &ExportOptions { name: name.into() }).unwrap();
     let soup = load_slice(&bytes, None).unwrap_or_else(|e| panic!("{name}: the export does not load: {e}"));
     assert_eq!(soup.triangle_count(), 2 * stats.quads, "{name}");
-    let lo: [u16; 3] = std::array::from_fn(|a| model.voxels.iter().map(|v| v.cell[a]).min().unwrap());
-    let hi: [u16; 3] = std::array::from_fn(|a| model.voxels.iter().map(|v| v.cell[a]).max().unwrap());
+    let lo: [u16; 3] = std::array::from_fn(|a| model.voxels().map(|v| v.cell[a]).min().unwrap());
+    let hi: [u16; 3] = std::array::from_fn(|a| model.voxels().map(|v| v.cell[a]).max().unwrap());
     let sides: [u32; 3] = std::array::from_fn(|a| u32::from(hi[a] - lo[a]) + 1);
     let options = VoxelizeOptions {
         grid: GridSize::Resolution(sides.into_iter().max().unwrap()),
@@ -54,8 +54,8 @@ fn round_trip(name: &str, model: &VoxelModel) -> Result<(), String> {
     }
     let rgb = |c: [u8; 4]| [c[0], c[1], c[2]];
     let expected: HashMap<[u16; 3], [u8; 3]> =
-        model.voxels.iter().map(|v| (std::array::from_fn(|a| v.cell[a] - lo[a]), rgb(v.color))).collect();
-    let got: HashMap<[u16; 3], [u8; 3]> = back.voxels.iter().map(|v| (v.cell, rgb(v.color))).collect();
+        model.voxels().map(|v| (std::array::from_fn(|a| v.cell[a] - lo[a]), rgb(v.color))).collect();
+    let got: HashMap<[u16; 3], [u8; 3]> = back.voxels().map(|v| (v.cell, rgb(v.color))).collect();
     let missing = expected.keys().filter(|c| !got.contains_key(*c)).count();
     let extra = got.keys().filter(|c| !expected.contains_key(*c)).count();
     if (missing, extra) != (0, 0) {

@@ -33,7 +33,7 @@ fn option_sets(r: u32) -> [(&'static str, VoxelizeOptions); 3] {
 
 /// The stats and the cells (ascending) of a voxelization.
 fn outcome(m: &VoxelModel) -> (VoxelStats, Vec<[u16; 3]>) {
-    (m.stats, m.voxels.iter().map(|v| v.cell).collect())
+    (m.stats, m.voxels().map(|v| v.cell).collect())
 }
 
 #[test]
@@ -49,7 +49,7 @@ fn a_cube_gives_the_same_cells_under_any_node_scale_and_translation() {
                 (r.pow(3) as usize, shell, shell),
                 "{what} R={r}"
             );
-            assert_eq!(reference.voxels.len(), if options.hollow { shell } else { r.pow(3) as usize });
+            assert_eq!(reference.len(), if options.hollow { shell } else { r.pow(3) as usize });
             for s in SCALES {
                 // Moved by a few of its own sizes, and by about a hundred (where f32 keeps 2⁻¹⁸ of its size).
                 for translation in [[0.0; 3], [3.7, -1.3, 12.0], [105.25, -20.5, 7.75]].map(|t| t.map(|c| c * s)) {

@@ -15,7 +15,7 @@ fn an_axis_aligned_cube_gives_the_exact_cell_count() {
     for r in [1, 7, 32, 50] {
         let m = voxelize(&cube, &at_resolution(r)).unwrap();
         assert_eq!(m.spec.dims, [r; 3]);
-        assert_eq!(m.voxels.len(), (r * r * r) as usize, "R={r}");
+        assert_eq!(m.len(), (r * r * r) as usize, "R={r}");
         assert_eq!(m.stats.visible, if r <= 2 { (r * r * r) as usize } else { (r * r * r - (r - 2).pow(3)) as usize });
     }
     // The article's default cell: a 2×1×1 box whose diagonal scales to 9 holds ceil(extent / 0.24) cells.
@@ -62,8 +62,8 @@ fn a_torus_is_within_one_percent_of_its_volume_at_r64() {
             }
         }
     }
-    let rel = m.voxels.len() as f64 / sampled as f64;
-    assert!((rel - 1.0).abs() < 0.002, "mesh {} vs sampled analytic {sampled}", m.voxels.len());
+    let rel = m.len() as f64 / sampled as f64;
+    assert!((rel - 1.0).abs() < 0.002, "mesh {} vs sampled analytic {sampled}", m.len());
 }
 
 #[test]
@@ -107,7 +107,7 @@ fn hollow_keeps_exactly_the_cells_with_an_empty_face_neighbour() {
     assert!(kept.iter().all(|c| !interior.contains(c)), "an interior cell was kept");
     assert_eq!(kept.len() + interior.len(), filled.len());
     assert_eq!(hollow.stats.visible, kept.len());
-    assert!(hollow.voxels.iter().all(|v| v.visible));
+    assert!(hollow.voxels().all(|v| v.visible));
 }
 
 #[test]
@@ -127,7 +127,7 @@ fn taller_cells_for_lego_bricks() {
     let m = voxelize(&cube, &VoxelizeOptions { cell_height_ratio: 1.2, ..at_resolution(24) }).unwrap();
     assert!((m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5);
     assert_eq!(m.spec.dims, [24, 20, 24]);
-    assert_eq!(m.voxels.len(), 24 * 20 * 24);
+    assert_eq!(m.len(), 24 * 20 * 24);
 }
 
 #[test]
@@ -140,7 +140,7 @@ fn an_open_sheet_survives_as_surface_and_flood_closes_small_holes() {
     let sheet = TriangleSoup::from_mesh(&sheet, WHITE);
     let m = voxelize(&sheet, &at_resolution(20)).unwrap();
     assert_eq!(m.spec.dims[1], 1);
-    assert_eq!(m.voxels.len(), 400);
+    assert_eq!(m.len(), 400);
 
     // A sphere with one triangle missing: flood fill still fills it (the hole is far below a cell).
     let mut holed = uv_sphere(1.0, 64);
@@ -152,8 +152,8 @@ fn an_open_sheet_survives_as_surface_and_flood_closes_small_holes() {
     assert_eq!(cells(&flood), cells(&reference));
     // Surface only: no interior cell.
     let surface = voxelize(&closed, &VoxelizeOptions { fill: FillMode::None, ..at_resolution(32) }).unwrap();
-    assert_eq!(surface.voxels.len(), surface.stats.surface);
-    assert!(surface.voxels.len() < reference.voxels.len() / 2);
+    assert_eq!(surface.len(), surface.stats.surface);
+    assert!(surface.len() < reference.len() / 2);
 }
 
 #[test]
@@ -163,13 +163,13 @@ fn grid_size_and_resolution_place_cell_centres_inside_the_model_bounds() {
     // The bounding-box diagonal 2√3 becomes 9: the radius becomes 9 / (2√3).
     let radius = 9.0 / (2.0 * 3f32.sqrt());
     let slack = 0.5 * 0.5 * 3f32.sqrt();
-    for v in &m.voxels {
-        let c = m.center(v);
+    for v in m.voxels() {
+        let c = m.center(&v);
         let r = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
         assert!(r < radius + slack, "voxel centre {c:?} outside the normalized sphere");
     }
-    assert!(m.voxels.iter().any(|v| {
-        let c = m.center(v);
+    assert!(m.voxels().any(|v| {
+        let c = m.center(&v);
         (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() > radius - 0.5
     }));
 }

@@ -112,7 +112,7 @@ fn two_overlapping_boxes_in_one_primitive_give_exactly_the_union_cells() {
     wrong.sort();
     assert!(wrong.is_empty(), "{} cells, {} expected; wrong: {wrong:?}", got.len(), expected.len());
     let parity = voxelize(&soup, &fill_only(FillMode::Parity)).unwrap();
-    assert_eq!(parity.voxels.len(), expected.len() - 4 * 4 * 4, "parity empties the overlap");
+    assert_eq!(parity.len(), expected.len() - 4 * 4 * 4, "parity empties the overlap");
 }
 
 #[test]
@@ -140,7 +140,7 @@ fn an_inside_out_torus_and_a_half_reversed_sphere_keep_their_volume() {
 
 /// Filled cells whose centre lies within `radius` of the grid's centre.
 fn filled_near_centre(m: &VoxelModel, radius: f32) -> usize {
-    m.voxels.iter().filter(|v| m.center(v).iter().map(|c| c * c).sum::<f32>().sqrt() < radius).count()
+    m.voxels().filter(|v| m.center(v).iter().map(|c| c * c).sum::<f32>().sqrt() < radius).count()
 }
 
 #[test]
@@ -196,8 +196,7 @@ fn hollow_sphere_and_slab_has_no_wall_around_an_empty_inside() {
         let cell = f64::from(hollow.spec.cell[0]) / f64::from(hollow.spec.scale);
         // Kept cells with a face neighbour that is empty although it lies a cell deep inside the union.
         let walls = hollow
-            .voxels
-            .iter()
+            .voxels()
             .filter(|v| {
                 (0..3).any(|a| {
                     [-1i32, 1].into_iter().any(|d| {

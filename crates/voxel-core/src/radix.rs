@@ -1,0 +1,52 @@
+//! A stable least-significant-digit radix sort by a small integer key: two or three passes over the list
+//! where a comparison sort takes log n, for the shell's (cell, triangle) overlaps, the fill's column crossings
+//! and the colour count.
+
+/// Bits of the key sorted per pass.
+const DIGIT_BITS: u32 = 11;
+
+/// Sorts `items` by `key(item)`, which must be below 2^`bits`, keeping the order of items with equal keys.
+pub(crate) fn sort_by_key<T: Copy + Default>(mut items: Vec<T>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
+    let mask = (1u32 << DIGIT_BITS) - 1;
+    let mut sorted = vec![T::default(); items.len()];
+    let mut shift = 0;
+    while shift < bits {
+        let digit = |item: &T| ((key(item) >> shift) & mask) as usize;
+        let mut starts = vec![0usize; 1 << DIGIT_BITS];
+        for item in &items {
+            starts[digit(item)] += 1;
+        }
+        let mut total = 0;
+        for start in &mut starts {
+            (*start, total) = (total, total + *start);
+        }
+        for item in &items {
+            let d = digit(item);
+            sorted[starts[d]] = *item;
+            starts[d] += 1;
+        }
+        std::mem::swap(&mut items, &mut sorted);
+        shift += DIGIT_BITS;
+    }
+    items
+}
+
+/// The bits a key below `count` needs.
+pub(crate) fn bits_for(count: usize) -> u32 {
+    usize::BITS - count.saturating_sub(1).leading_zeros()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorts_by_the_key_and_keeps_the_order_of_equal_keys() {
+        let keys = [5_000_000u32, 3, 70_000, 3, 5_000_000, 0, 2047, 2048, u32::MAX];
+        let items: Vec<(u32, usize)> = keys.iter().copied().zip(0..).collect();
+        let mut expected = items.clone();
+        expected.sort_by_key(|i| i.0);
+        assert_eq!(sort_by_key(items, 32, |i| i.0), expected);
+        assert_eq!((bits_for(1), bits_for(2), bits_for(2048), bits_for(2049)), (0, 1, 11, 12));
+    }
+}
