@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use bevy::prelude::*;
 use clap::Parser;
 
+use crate::animation::AnimationStart;
 use crate::export::ExportDir;
 use crate::input::PointerMode;
 use crate::library::LibrarySetup;
@@ -55,6 +56,12 @@ pub struct AppArgs {
     /// ./voxel-art-exports].
     #[arg(long, value_name = "DIR")]
     pub export_dir: Option<PathBuf>,
+    /// An animated model plays this clip (name or index) [default: its first].
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub clip: Option<String>,
+    /// An animated model starts paused this many seconds into its clip (P plays; frames for screenshots).
+    #[arg(long, value_name = "SECONDS")]
+    pub anim_time: Option<f32>,
 }
 
 impl AppArgs {
@@ -83,6 +90,7 @@ impl AppArgs {
             ..transition
         });
         app.insert_resource(self.export_dir.clone().map_or_else(ExportDir::default, ExportDir));
+        app.insert_resource(AnimationStart { clip: self.clip.clone(), time: self.anim_time });
     }
 
     /// The `--screenshot` capture, when asked for.
