@@ -8,12 +8,14 @@ use bevy::prelude::*;
 use voxel_art::animation::{AnimationRequest, CellSlots, PoseJob};
 use voxel_art::config::AppArgs;
 use voxel_art::instancing::{Vacant, VoxelHome, VoxelPool};
+use voxel_art::library::LibraryRequest;
 use voxel_art::model::{ModelLibrary, Playback, VoxelModelAsset};
-use voxel_art::settings::VoxelSettings;
-use voxel_art::transition::ActiveTransition;
+use voxel_art::settings::{Style, VoxelSettings};
+use voxel_art::style::falling::FallingPile;
+use voxel_art::transition::{ActiveTransition, VoxelTween};
 
 use crate::common::models_dir;
-use crate::harness::{app_options, run_until, test_app};
+use crate::harness::{all_settled, app_options, run_until, test_app};
 
 const LIMIT: Duration = Duration::from_secs(120);
 
@@ -203,4 +205,45 @@ fn picking_a_clip_by_index_plays_it_in_its_own_grid() {
     app.world_mut().write_message(AnimationRequest::Clip(3));
     app.update();
     assert_eq!(playback(&app).clip, 2);
+}
+
+#[test]
+fn a_morph_to_another_model_starts_from_the_current_pose() {
+    let Some(mut app) = fox_app(AppArgs { clip: Some("Run".into()), ..default() }, &["khronos-duck.glb"]) else {
+        return;
+    };
+    run_until(&mut app, LIMIT, |app| following(app) && all_settled(app));
+    let cells = shown_cells(&app);
+    app.world_mut().write_message(LibraryRequest::Select(1));
+    app.update();
+    // Every voxel of the pose takes off from its cell (the morph plans from where the voxels are).
+    let mut flights = app.world_mut().query::<(Entity, &VoxelTween)>();
+    let from: HashMap<Entity, Vec3> = flights.iter(app.world()).map(|(e, t)| (e, t.from)).collect();
+    assert!(from.len() >= cells.len(), "{} flights for {} cells", from.len(), cells.len());
+    for (cell, entity) in &cells {
+        let home = Vec3::from_array(cell.map(f32::from_bits));
+        assert!(from[entity].distance(home) < 1e-4, "a voxel of the pose started away from its cell");
+    }
+}
+
+#[test]
+fn falling_drops_the_pose_and_reassembles_into_the_playing_model() {
+    let Some(mut app) = fox_app(AppArgs::default(), &[]) else { return };
+    run_until(&mut app, LIMIT, |app| following(app));
+    app.world_mut().resource_mut::<NextState<Style>>().set(Style::Falling);
+    run_until(&mut app, LIMIT, |app| app.world().get_resource::<FallingPile>().is_some());
+    let placed = playback(&app).counts.placed;
+    let cells = shown_cells(&app);
+    for _ in 0..60 {
+        app.update();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert!(playback(&app).counts.placed > placed, "the animation plays on while the voxels lie in the pile");
+    assert_eq!(shown_cells(&app), cells, "no pose is laid out while the pool is held");
+    app.world_mut().resource_mut::<NextState<Style>>().set(Style::RoundedBoxes);
+    run_until(&mut app, LIMIT, |app| app.world().get_resource::<FallingPile>().is_none() && following(app));
+    // Back together in the latest pose (a pose placed during the morph is applied once it lands).
+    let latest = pose(&app).unwrap();
+    let hollow = app.world().resource::<VoxelSettings>().hollow;
+    assert_eq!(shown_cells(&app).keys().copied().collect::<HashSet<_>>(), model_cells(&latest, hollow));
 }
