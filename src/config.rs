@@ -59,9 +59,10 @@ pub struct AppArgs {
     /// An animated model plays this clip (name or index) [default: its first].
     #[arg(long, value_name = "NAME|INDEX")]
     pub clip: Option<String>,
-    /// An animated model starts paused this many seconds into its clip (P plays; frames for screenshots).
-    #[arg(long, value_name = "SECONDS")]
-    pub anim_time: Option<f32>,
+    /// An animated model starts paused this many seconds into its clip (P plays). With --screenshot, several
+    /// times (`0,0.3,0.6`) save one PNG each (`out-0.png`, `out-1.png`, …), --frames after each.
+    #[arg(long, value_name = "SECONDS", value_delimiter = ',')]
+    pub anim_time: Vec<f32>,
 }
 
 impl AppArgs {
@@ -90,12 +91,13 @@ impl AppArgs {
             ..transition
         });
         app.insert_resource(self.export_dir.clone().map_or_else(ExportDir::default, ExportDir));
-        app.insert_resource(AnimationStart { clip: self.clip.clone(), time: self.anim_time });
+        app.insert_resource(AnimationStart { clip: self.clip.clone(), time: self.anim_time.first().copied() });
     }
 
     /// The `--screenshot` capture, when asked for.
     pub(crate) fn screenshot_plugin(&self) -> Option<ScreenshotPlugin> {
         let path = self.screenshot.clone()?;
-        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then })
+        let seeks = self.anim_time.iter().skip(1).copied().collect();
+        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then, seeks })
     }
 }

@@ -93,7 +93,7 @@ fn the_fox_loads_as_animated_with_its_clips_and_a_static_model_has_no_animation(
 
 #[test]
 fn the_pose_shown_is_the_cores_pose_in_the_clips_grid() {
-    let args = AppArgs { clip: Some("Run".into()), anim_time: Some(0.4), ..default() };
+    let args = AppArgs { clip: Some("Run".into()), anim_time: vec![0.4], ..default() };
     let Some(mut app) = fox_app(args, &[]) else { return };
     run_until(&mut app, LIMIT, |app| following(app));
     let p = playback(&app);
