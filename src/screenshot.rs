@@ -290,3 +290,18 @@ impl Plugin for ScreenshotPlugin {
         app.add_systems(Update, drive.in_set(AppSystems::Present));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn several_animation_times_number_their_pngs() {
+        let one = ScreenshotPlugin { path: "shots/fox.png".into(), frames: 20, then: None, seeks: Vec::new() };
+        assert_eq!(one.shot_path(0), PathBuf::from("shots/fox.png"));
+        let three = ScreenshotPlugin { seeks: vec![0.3, 0.6], ..one };
+        let paths: Vec<PathBuf> = (0..3).map(|i| three.shot_path(i)).collect();
+        assert_eq!(paths, ["shots/fox-0.png", "shots/fox-1.png", "shots/fox-2.png"].map(PathBuf::from));
+        assert_eq!(sidecar_path(&paths[1]), PathBuf::from("shots/fox-1.png.json"));
+    }
+}
