@@ -1,14 +1,14 @@
-//! Tiles screenshots side by side into one strip, each cropped to the stage (between the panel and the preview
-//! tiles) and scaled down: `cargo run --example strip -- OUT.png FRAME.png…` (how docs/anim-fox.png and
-//! docs/anim-morphcube.png were made from `--screenshot` frames).
+//! Tiles screenshots side by side into one strip, each cropped to the middle of the stage (between the panel
+//! and the preview tiles) and scaled down: `cargo run --example strip -- OUT.png FRAME.png…` (how
+//! docs/anim-fox.png and docs/anim-morphcube.png were made from `--screenshot` frames).
 
 use image::imageops::{FilterType, crop_imm, overlay, resize};
 use image::{RgbImage, RgbaImage};
 
-/// The stage part of a 1280 × 720 window: right of the panel, left of the preview tiles (x, y, width, height).
-const STAGE: (u32, u32, u32, u32) = (330, 90, 760, 560);
+/// The middle of the stage in a 1280 × 720 window, where the model stands (x, y, width, height).
+const STAGE: (u32, u32, u32, u32) = (420, 130, 480, 440);
 /// Scale of each tile in the strip.
-const SCALE: f32 = 0.5;
+const SCALE: f32 = 0.6;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -247,3 +247,38 @@ fn falling_drops_the_pose_and_reassembles_into_the_playing_model() {
     let hollow = app.world().resource::<VoxelSettings>().hollow;
     assert_eq!(shown_cells(&app).keys().copied().collect::<HashSet<_>>(), model_cells(&latest, hollow));
 }
+
+#[test]
+fn in_lego_and_bubbles_exactly_the_cells_show() {
+    let Some(mut app) = fox_app(AppArgs { clip: Some("Run".into()), ..default() }, &[]) else { return };
+    run_until(&mut app, LIMIT, |app| following(app));
+    for style in [Style::Lego, Style::Bubbles] {
+        app.world_mut().resource_mut::<NextState<Style>>().set(style);
+        app.world_mut().write_message(AnimationRequest::Play(true));
+        let placed = playback(&app).counts.placed;
+        // Lego voxelizes with taller cells: a new grid, so a morph, then the poses flow again.
+        run_until(&mut app, LIMIT, |app| following(app) && playback(app).counts.placed > placed + 10);
+        let cell = pose(&app).unwrap().spec.cell;
+        assert_eq!(cell[1] / cell[0] > 1.1, style == Style::Lego, "{style:?}: cell {cell:?}");
+        // Pause, let the last pops land, and give the style's placement some frames.
+        app.world_mut().write_message(AnimationRequest::Play(false));
+        run_until(&mut app, LIMIT, |app| {
+            let mut busy = app.world_mut().query_filtered::<(), Or<(With<PoseJob>, With<VoxelTween>)>>();
+            busy.iter(app.world()).next().is_none() && following(app)
+        });
+        for _ in 0..30 {
+            app.update();
+        }
+        let cells = shown_cells(&app);
+        for entity in cells.values() {
+            assert_eq!(
+                app.world().get::<Visibility>(*entity),
+                Some(&Visibility::Inherited),
+                "{style:?}: a cell hidden"
+            );
+        }
+        let mut shown = app.world_mut().query_filtered::<&Visibility, With<VoxelHome>>();
+        let showing = shown.iter(app.world()).filter(|v| **v == Visibility::Inherited).count();
+        assert_eq!(showing, cells.len(), "{style:?}: voxels showing besides the cells (a vacant slot?)");
+    }
+}
