@@ -282,3 +282,22 @@ fn in_lego_and_bubbles_exactly_the_cells_show() {
         assert_eq!(showing, cells.len(), "{style:?}: voxels showing besides the cells (a vacant slot?)");
     }
 }
+
+#[test]
+fn the_morph_cube_shows_its_weights_pose() {
+    let Some(dir) = models_dir() else { return };
+    let path = dir.join("khronos-animatedmorphcube/AnimatedMorphCube.gltf");
+    let args = AppArgs { models: vec![path.clone()], no_shipped: true, anim_time: vec![1.0], ..default() };
+    let mut app = test_app(args);
+    run_until(&mut app, LIMIT, |app| following(app));
+    let mut core = voxel_core::load_animated_file(&path).unwrap();
+    let bounds = core.clip_bounds(0).unwrap();
+    let mut soup = voxel_core::TriangleSoup::default();
+    core.pose_into(0, 1.0, &mut soup).unwrap();
+    let expected = voxel_core::voxelize_within(&soup, &app_options(&app), bounds).unwrap();
+    let shown = pose(&app).unwrap();
+    assert_eq!((shown.spec, shown.stats), (expected.spec, expected.stats));
+    assert!(shown.voxels == expected.voxels, "other cells or colours than the core's pose");
+    let hollow = app.world().resource::<VoxelSettings>().hollow;
+    assert_eq!(shown_cells(&app).keys().copied().collect::<HashSet<_>>(), model_cells(&shown, hollow));
+}
