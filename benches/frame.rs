@@ -1,8 +1,10 @@
 //! `cargo bench --bench frame`: CPU time per frame of the app's systems (no GPU) with 100k voxels: static,
 //! with every voxel's colour changing every frame, mid-morph (every voxel tweening) and with the cursor over
-//! the model (repel); and one falling-pile physics step of 20k voxels. Mean and median. And the live grid
-//! slider: the latency from a grid change to the model on screen's new voxels on their cells.
-//! `cargo bench --bench frame -- pile` runs only the pile (likewise static, recolour, morph, repel, slider).
+//! the model (repel); one falling-pile physics step of 20k voxels; the live grid slider: the latency from a grid
+//! change to the model on screen's new voxels on their cells; and the Fox (`../shared/models`) running its Run
+//! clip for ten seconds of real time paced at 60 frames a second: the main thread's work per frame and the
+//! poses asked for, placed and dropped. Mean and median. `cargo bench --bench frame -- pile` runs only the
+//! pile (likewise static, recolour, morph, repel, slider, fox).
 
 use std::time::Instant;
 
@@ -97,6 +99,9 @@ fn main() {
     if wanted("slider") {
         slider_sweeps();
     }
+    if wanted("fox") {
+        fox_running();
+    }
     if !["static", "recolour", "morph", "repel"].into_iter().any(wanted) {
         return;
     }
@@ -142,6 +147,71 @@ fn main() {
             "repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame"
         );
     }
+}
+
+/// The Fox playing its Run clip (30 poses a second, each posed and voxelized on the async pool) for ten seconds
+/// of real time paced at 60 frames a second (a fixed step run flat out would outpace the pose jobs): the main
+/// thread's work per frame, and the poses asked for, placed and dropped.
+fn fox_running() {
+    use std::time::Duration;
+    use voxel_art::animation::CellSlots;
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
+    let dir = std::env::var_os("VOXEL_ART_MODELS").map_or(models, std::path::PathBuf::from);
+    let fox = dir.join("khronos-fox.glb");
+    if !fox.is_file() {
+        println!("fox: skipped, {} not found (set VOXEL_ART_MODELS)", fox.display());
+        return;
+    }
+    let args = voxel_art::config::AppArgs {
+        models: vec![fox],
+        no_shipped: true,
+        clip: Some("Run".into()),
+        ..Default::default()
+    };
+    let mut app = voxel_art::headless::headless_app(&args);
+    let following = |app: &App| {
+        let slots = app.world().resource::<CellSlots>();
+        slots.model().is_some()
+            && slots.model() == app.world().resource::<VoxelPool>().shown
+            && app.world().resource::<ActiveTransition>().running.is_none()
+    };
+    let start = Instant::now();
+    while !following(&app) {
+        assert!(start.elapsed() < Duration::from_secs(120), "the Fox never showed");
+        app.update();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let counts = |app: &App| {
+        let library = app.world().resource::<ModelLibrary>();
+        library.entries[0].animation.as_ref().expect("the Fox is animated").counts
+    };
+    app.insert_resource(bevy::time::TimeUpdateStrategy::Automatic);
+    let frame = Duration::from_secs_f64(1.0 / 60.0);
+    let before = counts(&app);
+    let start = Instant::now();
+    let mut frames = 0;
+    let mut frame_ms = Vec::new();
+    while start.elapsed() < Duration::from_secs(10) {
+        let t = Instant::now();
+        app.update();
+        frame_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        frames += 1;
+        if let Some(rest) = frame.checked_sub(t.elapsed()) {
+            std::thread::sleep(rest);
+        }
+    }
+    let after = counts(&app);
+    let mean = frame_ms.iter().sum::<f64>() / frame_ms.len() as f64;
+    frame_ms.sort_by(f64::total_cmp);
+    println!(
+        "fox running, 10 s of real time: {frames} frames, mean {mean:.2} ms/frame, median {:.2} ms/frame; \
+         poses asked {}, placed {}, dropped {} ({} slots at the end)",
+        frame_ms[frame_ms.len() / 2],
+        after.requested - before.requested,
+        after.placed - before.placed,
+        after.dropped - before.dropped,
+        app.world().resource::<VoxelPool>().visible
+    );
 }
 
 /// Moves the cursor ray on a circle of radius 1.5 across the model's front, one turn in 2 s.

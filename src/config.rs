@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use bevy::prelude::*;
 use clap::{Parser, Subcommand};
 
+use crate::animation::AnimationStart;
 use crate::export::ExportDir;
 use crate::input::PointerMode;
 use crate::library::LibrarySetup;
@@ -87,6 +88,13 @@ pub struct AppArgs {
     /// ./voxel-art-exports].
     #[arg(long, value_name = "DIR")]
     pub export_dir: Option<PathBuf>,
+    /// An animated model plays this clip (name or index) [default: its first].
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub clip: Option<String>,
+    /// An animated model starts paused this many seconds into its clip (P plays). With --screenshot, several
+    /// times (`0,0.3,0.6`) save one PNG each (`out-0.png`, `out-1.png`, …), --frames after each.
+    #[arg(long, value_name = "SECONDS", value_delimiter = ',')]
+    pub anim_time: Vec<f32>,
 }
 
 impl AppArgs {
@@ -107,11 +115,13 @@ impl AppArgs {
             ..transition
         });
         app.insert_resource(self.export_dir.clone().map_or_else(ExportDir::default, ExportDir));
+        app.insert_resource(AnimationStart { clip: self.clip.clone(), time: self.anim_time.first().copied() });
     }
 
     /// The `--screenshot` capture, when asked for.
     pub(crate) fn screenshot_plugin(&self) -> Option<ScreenshotPlugin> {
         let path = self.screenshot.clone()?;
-        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then })
+        let seeks = self.anim_time.iter().skip(1).copied().collect();
+        Some(ScreenshotPlugin { path, frames: self.frames, then: self.then, seeks })
     }
 }

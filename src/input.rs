@@ -1,11 +1,13 @@
 //! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, S cycles styles, Ctrl+S exports the shown model, F
-//! drops/reassembles (falling style), R toggles mouse repel, H toggles the panel, Esc quits; a short click on
+//! drops/reassembles (falling style), R toggles mouse repel, P plays/pauses an animated model, H toggles the
+//! panel, Esc quits; a short click on
 //! the stage goes to the next model, while press-and-hold (or a drag) orbits.
 
 use bevy::input::mouse::MouseButton;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 
+use crate::animation::AnimationRequest;
 use crate::export::ExportRequest;
 use crate::library::LibraryRequest;
 use crate::schedule::AppSystems;
@@ -98,6 +100,7 @@ fn keys(
     mut next_style: ResMut<NextState<Style>>,
     mut fall: MessageWriter<ToggleFall>,
     mut export: MessageWriter<ExportRequest>,
+    mut animation: MessageWriter<AnimationRequest>,
     mut exit: MessageWriter<AppExit>,
 ) {
     if keys.just_pressed(KeyCode::ArrowRight) || keys.just_pressed(KeyCode::Space) {
@@ -134,6 +137,9 @@ fn keys(
     }
     if keys.just_pressed(KeyCode::KeyF) {
         fall.write(ToggleFall);
+    }
+    if keys.just_pressed(KeyCode::KeyP) {
+        animation.write(AnimationRequest::TogglePlay);
     }
     if keys.just_pressed(KeyCode::KeyR) {
         repel.enabled = !repel.enabled;

@@ -2,11 +2,13 @@
 //!
 //! Plugins (one per module, `pub(super) fn plugin`): `library` (fills the [`model::ModelLibrary`]), `voxelize`
 //! (async voxelization into [`model::VoxelModelAsset`]s), `instancing` (one entity per voxel, one mesh, one
-//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `style` (Lego, bubbles,
+//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `animation` (animated models
+//! posed and voxelized live, their cells followed by the voxels), `style` (Lego, bubbles,
 //! falling, mouse repel), `input`, `export` (saves the shown model as .vox and .glb), and the render-side
 //! `stage`, `camera`, `ui`, `preview`, `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU,
 //! for tests.
 
+pub mod animation;
 pub mod assets;
 mod camera;
 pub mod config;
@@ -45,13 +47,19 @@ impl Plugin for LogicPlugin {
             voxelize::plugin,
             instancing::plugin,
             transition::plugin,
+            animation::plugin,
             style::plugin,
             input::plugin,
             export::plugin,
         ));
-        // The library reads files before voxelization picks them up, and exports save what voxelization made
-        // (no plugin names another).
-        app.configure_sets(Update, (library::LibrarySystems, voxelize::VoxelizeSystems, export::ExportSystems).chain());
+        // The library reads files before voxelization picks them up, animation poses what voxelization read, the
+        // pool grows for the pose and exports save what they made (no plugin names another).
+        app.configure_sets(
+            Update,
+            (library::LibrarySystems, voxelize::VoxelizeSystems, animation::AnimationSystems, export::ExportSystems)
+                .chain(),
+        );
+        app.configure_sets(Update, animation::AnimationSystems.before(instancing::InstancingSystems));
     }
 
     fn cleanup(&self, app: &mut App) {

@@ -1,6 +1,9 @@
 //! The models as data: the list the app cycles through, each model's status, its voxelization (the
 //! [`VoxelModelAsset`]) and the one lookup of "the current model, if it is ready". No systems live here: the
-//! `library` plugin fills the list, `voxelize` turns its entries into voxels, the rest read it.
+//! `library` plugin fills the list, `voxelize` turns its entries into voxels, `animation` poses animated ones,
+//! the rest read it.
+
+pub mod playback;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -8,6 +11,8 @@ use std::sync::Arc;
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use voxel_core::{TriangleSoup, Voxel, VoxelModel};
+
+pub use playback::Playback;
 
 /// A voxelized model as a Bevy asset, with every solid voxel (interior ones included); it dereferences to the
 /// core's [`VoxelModel`].
@@ -67,6 +72,8 @@ pub struct ModelEntry {
     pub voxels_generation: Option<u64>,
     /// How long the latest voxelization took.
     pub voxelize_ms: f32,
+    /// The animation, when the file has clips (read by the same import as `soup`); `None` for a static model.
+    pub animation: Option<Playback>,
 }
 
 impl ModelEntry {
@@ -82,12 +89,22 @@ impl ModelEntry {
             voxels: None,
             voxels_generation: None,
             voxelize_ms: 0.0,
+            animation: None,
         }
     }
 
     /// Its latest voxelization, if any (it may be of older settings while a new one runs).
     pub fn latest<'a>(&self, models: &'a Assets<VoxelModelAsset>) -> Option<&'a VoxelModelAsset> {
         self.voxels.as_ref().and_then(|h| models.get(h))
+    }
+
+    /// The voxels it is shown with: an animated model's latest pose (none until the first is placed), else its
+    /// latest voxelization.
+    pub fn shown_handle(&self) -> Option<&Handle<VoxelModelAsset>> {
+        match &self.animation {
+            Some(animation) => animation.pose.as_ref(),
+            None => self.voxels.as_ref(),
+        }
     }
 }
 
@@ -114,7 +131,7 @@ impl ModelLibrary {
         models: &'a Assets<VoxelModelAsset>,
     ) -> Option<(AssetId<VoxelModelAsset>, &'a VoxelModelAsset)> {
         let entry = self.current_entry().filter(|e| e.status == ModelStatus::Ready)?;
-        let handle = entry.voxels.as_ref()?;
+        let handle = entry.shown_handle()?;
         models.get(handle).map(|m| (handle.id(), m))
     }
 

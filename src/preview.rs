@@ -1,5 +1,8 @@
 //! Preview viewports: each model's original glTF in a small viewport along the right edge, with its own
-//! camera, render layer and soft coloured background, turning slowly; clicking one picks that model.
+//! camera, render layer and soft coloured background, turning slowly; clicking one picks that model. An
+//! animated model's tile plays its clip (`play`).
+
+mod play;
 
 use bevy::app::{HierarchyPropagatePlugin, Propagate};
 use bevy::camera::Viewport;
@@ -148,7 +151,10 @@ pub(super) fn plugin(app: &mut App) {
     app.add_plugins(HierarchyPropagatePlugin::<RenderLayers>::new(PostUpdate));
     app.add_systems(Startup, setup_light);
     app.add_systems(Update, pick.in_set(crate::schedule::AppSystems::Pointer));
-    app.add_systems(Update, (spawn_previews, layout_and_turn).chain().in_set(crate::schedule::AppSystems::Present));
+    app.add_systems(
+        Update,
+        (spawn_previews, layout_and_turn, play::systems()).chain().in_set(crate::schedule::AppSystems::Present),
+    );
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
 //! `--screenshot out.png --frames N [--then M]`: once the first model has settled, run N more frames (with
 //! `--then`, switch to model M first: a frame of the morph), save the window to a PNG and exit (status 0). It
 //! exits with status 1, saying why, when no model can be shown (every file failed, or none settles within
-//! `MAX_WAIT_FRAMES`), when `--then` names no model of the list, and when the PNG cannot be written. Next to
+//! `MAX_WAIT_FRAMES`), when `--then` names no model of the list, and when the PNG cannot be written. With
+//! several `--anim-time`s, each capture is followed by a jump of the animation to the next time and N more
+//! frames, and the PNGs are numbered (`out-0.png`, …). Next to
 //! the PNG, `out.png.json`
 //! names where the camera projects the points a test checks: the floor under the model (in its shadow), the
 //! floor far from it, the background, and the model's most common voxel colour.
@@ -11,6 +13,7 @@ use std::path::{Path, PathBuf};
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 
+use crate::animation::AnimationRequest;
 use crate::camera::MainCamera;
 use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
@@ -32,6 +35,20 @@ pub struct ScreenshotPlugin {
     pub frames: u32,
     /// Switch to this model once the first has settled, and capture a frame of the morph.
     pub then: Option<usize>,
+    /// Animation times to jump to after the first capture, one capture each (`--anim-time` beyond the first).
+    pub seeks: Vec<f32>,
+}
+
+impl ScreenshotPlugin {
+    /// Where capture `shot` goes: the path itself when there is one capture, else `stem-<shot>.<ext>`.
+    fn shot_path(&self, shot: usize) -> PathBuf {
+        if self.seeks.is_empty() {
+            return self.path.clone();
+        }
+        let stem = self.path.file_stem().unwrap_or_default().to_string_lossy();
+        let ext = self.path.extension().map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+        self.path.with_file_name(format!("{stem}-{shot}{ext}"))
+    }
 }
 
 /// How far the capture has got.
@@ -43,6 +60,7 @@ struct Progress {
     counting: bool,
     frames: u32,
     requested: bool,
+    shot: usize,
 }
 
 /// Screen points (logical pixels) a screenshot test checks.
@@ -146,6 +164,7 @@ fn drive(
     mut finished: MessageReader<TransitionFinished>,
     library: Res<ModelLibrary>,
     mut requests: MessageWriter<LibraryRequest>,
+    mut seek: MessageWriter<AnimationRequest>,
     mut progress: Local<Progress>,
     mut exit: MessageWriter<AppExit>,
 ) {
@@ -187,7 +206,17 @@ fn drive(
     if progress.frames < request.frames {
         return;
     }
-    progress.requested = true;
+    let shot = progress.shot;
+    let last = shot == request.seeks.len();
+    if last {
+        progress.requested = true;
+    } else {
+        // This capture, then the next time and --frames more.
+        seek.write(AnimationRequest::Seek(request.seeks[shot]));
+        progress.shot += 1;
+        progress.frames = 0;
+    }
+    let png = request.shot_path(shot);
     if let (Ok((camera, camera_transform)), Ok(light), Ok(floor), Ok(window)) =
         (camera.single(), light.single(), floor.single(), window.single())
     {
@@ -195,15 +224,15 @@ fn drive(
         let probe =
             probe(camera, camera_transform, light, floor.translation().y, model, settings.hollow, window.size());
         let json = serde_json::to_string_pretty(&probe).unwrap_or_default();
-        let sidecar = sidecar_path(&request.path);
+        let sidecar = sidecar_path(&png);
         if let Err(e) = std::fs::write(&sidecar, json) {
             error!("cannot write {}: {e}", sidecar.display());
             exit.write(AppExit::error());
             return;
         }
     }
-    info!("saving screenshot to {}", request.path.display());
-    let path = request.path.clone();
+    info!("saving screenshot to {}", png.display());
+    let path = png;
     commands.spawn(Screenshot::primary_window()).observe(
         move |captured: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
             let saved = captured
@@ -215,7 +244,9 @@ fn drive(
             match saved {
                 Ok(()) => {
                     info!("screenshot saved to {}", path.display());
-                    exit.write(AppExit::Success);
+                    if last {
+                        exit.write(AppExit::Success);
+                    }
                 }
                 Err(e) => {
                     error!("cannot write the screenshot {}: {e}", path.display());
@@ -257,5 +288,20 @@ impl Plugin for ScreenshotPlugin {
         app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
         app.insert_resource(self.clone());
         app.add_systems(Update, drive.in_set(AppSystems::Present));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn several_animation_times_number_their_pngs() {
+        let one = ScreenshotPlugin { path: "shots/fox.png".into(), frames: 20, then: None, seeks: Vec::new() };
+        assert_eq!(one.shot_path(0), PathBuf::from("shots/fox.png"));
+        let three = ScreenshotPlugin { seeks: vec![0.3, 0.6], ..one };
+        let paths: Vec<PathBuf> = (0..3).map(|i| three.shot_path(i)).collect();
+        assert_eq!(paths, ["shots/fox-0.png", "shots/fox-1.png", "shots/fox-2.png"].map(PathBuf::from));
+        assert_eq!(sidecar_path(&paths[1]), PathBuf::from("shots/fox-1.png.json"));
     }
 }

@@ -4,11 +4,12 @@ use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use voxel_core::FillMode;
 
+use crate::animation::AnimationRequest;
 use crate::export::{ExportRequest, ExportStatus};
 use crate::input::PointerOverUi;
 use crate::instancing::VoxelPool;
 use crate::library::LibraryRequest;
-use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::settings::{PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
@@ -74,6 +75,31 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
     grid.dragged()
 }
 
+/// The current model's clips (pick one), play / pause, speed and where the clip is; absent for a static model.
+fn animation(ui: &mut egui::Ui, playback: &Playback, requests: &mut MessageWriter<AnimationRequest>) {
+    ui.heading("Animation");
+    for (i, clip) in playback.clips.iter().enumerate() {
+        let label = format!("{}  ({:.2} s)", clip.name, clip.duration);
+        if ui.selectable_label(i == playback.clip, label).clicked() {
+            requests.write(AnimationRequest::Clip(i));
+        }
+    }
+    ui.horizontal(|ui| {
+        if ui.button(if playback.playing { "⏸ pause (P)" } else { "▶ play (P)" }).clicked() {
+            requests.write(AnimationRequest::Play(!playback.playing));
+        }
+        ui.label(format!("{:.2} / {:.2} s", playback.time, playback.clip_info().duration));
+    });
+    let mut speed = playback.speed;
+    if ui.add(egui::Slider::new(&mut speed, 0.0..=2.0).text("playback speed")).changed() {
+        requests.write(AnimationRequest::Speed(speed));
+    }
+    let c = playback.counts;
+    ui.label(
+        egui::RichText::new(format!("poses: {} asked, {} shown, {} skipped", c.requested, c.placed, c.dropped)).small(),
+    );
+}
+
 fn transition_settings(ui: &mut egui::Ui, t: &mut TransitionSettings) {
     egui::CollapsingHeader::new("Transition").show(ui, |ui| {
         ui.add(egui::Slider::new(&mut t.max_delay, 0.0..=1.0).text("max delay s"));
@@ -115,7 +141,7 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         }
         ModelStatus::Ready => {}
     }
-    if let Some(model) = entry.latest(models) {
+    if let Some(model) = entry.shown_handle().and_then(|h| models.get(h)) {
         let s = model.stats;
         let shown = model.shown_count(hollow);
         ui.label(format!("{shown} voxels shown ({} filled, {} visible)", s.voxels, s.visible));
@@ -158,6 +184,7 @@ fn panel(
     mut transition: ResMut<TransitionSettings>,
     export_status: Res<ExportStatus>,
     mut export: MessageWriter<ExportRequest>,
+    mut animation_requests: MessageWriter<AnimationRequest>,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
@@ -180,6 +207,10 @@ fn panel(
             ui.heading("voxel-art");
             model_list(ui, &library, &mut requests);
             ui.separator();
+            if let Some(playback) = library.current_entry().and_then(|e| e.animation.as_ref()) {
+                animation(ui, playback, &mut animation_requests);
+                ui.separator();
+            }
             dragging = parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
             let mut edited_transition = transition.clone();
             transition_settings(ui, &mut edited_transition);
@@ -194,7 +225,7 @@ fn panel(
                 ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
             }
             ui.separator();
-            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · Ctrl+S: export · F: drop · R: repel · H: panel · Esc: quit").small());
+            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · Ctrl+S: export · F: drop · R: repel · P: play/pause · H: panel · Esc: quit").small());
         });
     });
     // Only touch the resource when something changed, so change detection means "edited".

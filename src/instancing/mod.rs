@@ -77,6 +77,8 @@ pub struct VoxelPool {
     pub visible: usize,
     /// The model laid out now, if any (none: placeholder boxes).
     pub shown: Option<AssetId<VoxelModelAsset>>,
+    /// The voxels are wanted elsewhere (the falling style drops them): an animated model's new poses wait.
+    pub held: bool,
 }
 
 /// Where one voxel of a model goes: centre in cloud space, scale and colour.
@@ -103,6 +105,11 @@ pub struct VoxelHome {
     /// Source part index.
     pub part: u32,
 }
+
+/// A slot inside the model's range that holds no voxel now (a cell an animated model's pose emptied): hidden,
+/// and left alone by the styles until a cell takes it again.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+pub struct Vacant;
 
 /// Mouse-repel displacement of a voxel (in the cloud's frame, like its home) and its spring velocity.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
@@ -224,6 +231,7 @@ pub(super) fn plugin(app: &mut App) {
     app.register_type::<VoxelSlot>()
         .register_type::<VoxelCloud>()
         .register_type::<VoxelHome>()
+        .register_type::<Vacant>()
         .register_type::<RepelOffset>();
     app.add_systems(Startup, setup);
     app.add_systems(

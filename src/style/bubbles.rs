@@ -5,7 +5,7 @@
 use bevy::prelude::*;
 
 use crate::input::CursorRay;
-use crate::instancing::{RepelOffset, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
+use crate::instancing::{RepelOffset, Vacant, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
 use crate::rng::Rng;
 use crate::schedule::AppSystems;
 use crate::settings::{RepelSettings, Style, VoxelSettings};
@@ -95,15 +95,15 @@ fn take_bubbles(
     pool: Res<VoxelPool>,
     active: Res<ActiveTransition>,
     mut voxels: Query<
-        (Entity, &VoxelSlot, &VoxelHome, &RepelOffset, &mut Transform, &mut Visibility, Has<VoxelTween>),
+        (Entity, &VoxelSlot, &VoxelHome, &RepelOffset, &mut Transform, &mut Visibility, Has<VoxelTween>, Has<Vacant>),
         With<Bubble>,
     >,
 ) {
     let turn = active.turn();
-    for (entity, slot, home, repel, mut transform, mut visibility, flying) in &mut voxels {
+    for (entity, slot, home, repel, mut transform, mut visibility, flying, vacant) in &mut voxels {
         commands.entity(entity).remove::<Bubble>();
-        // A voxel in flight is placed by its tween.
-        if (slot.0 as usize) < pool.visible && !flying {
+        // A voxel in flight is placed by its tween; a vacant slot stays hidden.
+        if (slot.0 as usize) < pool.visible && !flying && !vacant {
             *transform = voxel_transform(turn, home.position + repel.offset, home.scale);
             visibility.set_if_neq(Visibility::Inherited);
         }

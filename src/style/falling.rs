@@ -76,11 +76,13 @@ fn release(commands: &mut Commands, falling: &Query<Entity, With<Falling>>) {
 fn reassemble_on_exit(
     mut commands: Commands,
     mut requested: ResMut<FallRequested>,
+    mut pool: ResMut<VoxelPool>,
     pile: Option<Res<FallingPile>>,
     falling: Query<Entity, With<Falling>>,
     mut reassemble: MessageWriter<Reassemble>,
 ) {
     requested.0 = false;
+    pool.held = false;
     if pile.is_some() {
         release(&mut commands, &falling);
         reassemble.write(Reassemble);
@@ -102,12 +104,15 @@ fn control(
     mut seed: ResMut<PileSeed>,
     pile: Option<Res<FallingPile>>,
     voxels: Query<(Entity, &VoxelSlot, &GlobalTransform, &Visibility), (Without<VoxelTween>, Without<VoxelCloud>)>,
+    tweening: Query<(), With<VoxelTween>>,
     falling: Query<Entity, With<Falling>>,
     mut reassemble: MessageWriter<Reassemble>,
 ) {
     if toggles.read().count() % 2 == 1 {
         requested.0 = pile.is_none();
     }
+    // An animated model's new poses wait while the voxels are to fall or lie in the pile.
+    pool.held = requested.0 || pile.is_some();
     let wanted = library.current_ready(&models).map(|(id, _)| id);
     if let Some(pile) = &pile {
         // Another model (once it is ready): its morph starts from wherever the voxels lie.
@@ -126,6 +131,10 @@ fn control(
     let Some(id) = pool.shown.filter(|id| requested.0 && wanted == Some(*id) && resting.0 == Some(*id)) else {
         return;
     };
+    // Voxels still popping (an animated model's last pose) land first.
+    if !tweening.is_empty() {
+        return;
+    }
     let Some(model) = models.get(id) else { return };
     // The voxels a hollow display hides fall too, from their cells, on spare slots of the pool.
     let interior: Vec<_> = if settings.hollow {

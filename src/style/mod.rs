@@ -14,15 +14,15 @@ pub mod repel;
 
 use bevy::prelude::*;
 
-use crate::instancing::{VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
+use crate::instancing::{Vacant, VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
 use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
 use falling::Falling;
 use repel::RepelActive;
 
-/// Voxels that styles may move: not flying in a transition, not falling.
-pub type Settled = (Without<VoxelTween>, Without<Falling>, Without<VoxelCloud>);
+/// Voxels that styles may move: not flying in a transition (or popping), not falling, not a vacant slot.
+pub type Settled = (Without<VoxelTween>, Without<Falling>, Without<VoxelCloud>, Without<Vacant>);
 
 /// The mesh of a style.
 pub fn style_mesh(style: Style, roundness: f32) -> Mesh {

@@ -1,9 +1,10 @@
 //! Voxelization in the app, on the `AsyncComputeTaskPool`: the file → the core's importer (the same reader
 //! as the CLI, so the app and the CLI give the same cells and colours) → triangle soup, kept for later
-//! settings → the core voxelizer → [`VoxelModelAsset`]s. A settings change re-voxelizes every model, the one on
-//! screen first, and while a setting is dragged ([`SettingDrag`]) only that one; results of stale settings are
-//! dropped (latest wins). Once the core has read a file, Bevy's glTF loader is asked for it too, for its
-//! preview tile only.
+//! settings → the core voxelizer → [`VoxelModelAsset`]s. A file with animation clips keeps its animation from
+//! the same read (the `animation` plugin poses it); a static file costs what it did. A settings change
+//! re-voxelizes every model, the one on screen first, and while a setting is dragged ([`SettingDrag`]) only that
+//! one; results of stale settings are dropped (latest wins). Once the core has read a file, Bevy's glTF loader
+//! is asked for it too, for its preview tile only.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -12,9 +13,9 @@ use std::time::Instant;
 use bevy::asset::AssetPath;
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
-use voxel_core::{TriangleSoup, VoxelModel};
+use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
 
-use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::schedule::AppSystems;
 use crate::settings::{SettingDrag, Style, VoxelSettings};
 
@@ -38,8 +39,9 @@ pub struct VoxelizeJob {
     task: Task<JobResult>,
 }
 
-/// What a job hands back: the soup it read (or was given) and its voxels, or why the file failed.
-type JobResult = Result<(Arc<TriangleSoup>, VoxelModel), String>;
+/// What a job hands back: the soup it read (or was given), the animation read with it (a file with clips) and
+/// its voxels, or why the file failed.
+type JobResult = Result<(Arc<TriangleSoup>, Option<AnimatedModel>, VoxelModel), String>;
 
 /// What a job starts from: the soup read before, or the file the core's importer reads first.
 enum JobInput {
@@ -50,12 +52,22 @@ enum JobInput {
 impl JobInput {
     /// Imports (if needed) and voxelizes.
     fn run(self, options: &voxel_core::VoxelizeOptions) -> JobResult {
-        let soup = match self {
-            JobInput::Read(soup) => soup,
-            JobInput::File(path) => Arc::new(voxel_core::load_file(&path).map_err(|e| e.to_string())?),
+        let (soup, animation) = match self {
+            JobInput::Read(soup) => (soup, None),
+            JobInput::File(path) => read(&path)?,
         };
         let model = voxel_core::voxelize(&soup, options).map_err(|e| e.to_string())?;
-        Ok((soup, model))
+        Ok((soup, animation, model))
+    }
+}
+
+/// Reads a file once: its soup, and its animation when it has clips. A file whose animation data the core
+/// refuses still shows, still (read again without its animations: the error says nothing about the soup).
+fn read(path: &std::path::Path) -> Result<(Arc<TriangleSoup>, Option<AnimatedModel>), String> {
+    match voxel_core::load_animated_file(path) {
+        Ok(model) if model.clips().is_empty() => Ok((Arc::new(model.into_rest_soup()), None)),
+        Ok(model) => Ok((Arc::new(model.rest_soup().clone()), Some(model))),
+        Err(_) => Ok((Arc::new(voxel_core::load_file(path).map_err(|e| e.to_string())?), None)),
     }
 }
 
@@ -133,19 +145,20 @@ fn finish_jobs(
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
-        let Some(result) = check_ready(&mut job.task) else { continue };
+        let Some(mut result) = check_ready(&mut job.task) else { continue };
         commands.entity(entity).despawn();
-        if let (Ok((soup, _)), Some(entry)) = (&result, library.entries.get_mut(job.entry))
+        if let (Ok((soup, animation, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
             && entry.soup.is_none()
         {
             entry.soup = Some(soup.clone());
+            entry.animation = animation.take().map(Playback::new);
             entry.gltf = asset_server.load(AssetPath::parse(&entry.asset_path).into_owned());
         }
         if job.generation != generation.0 {
             continue;
         }
         match result {
-            Ok((_, model)) => {
+            Ok((_, _, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
                     entry.voxels = Some(models.add(VoxelModelAsset(model)));
                     entry.voxels_generation = Some(job.generation);

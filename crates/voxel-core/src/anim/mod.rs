@@ -239,6 +239,16 @@ impl AnimatedModel {
         &self.rest
     }
 
+    /// The static import, taken out of the model (what a caller keeps of a file without clips).
+    pub fn into_rest_soup(self) -> TriangleSoup {
+        self.rest
+    }
+
+    /// The node tree (at rest), by glTF node index.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
     /// The clips; empty when the model is not animated.
     pub fn clips(&self) -> &[ClipInfo] {
         &self.clips
@@ -256,29 +266,8 @@ impl AnimatedModel {
     /// `out`. `out` is reset to the rest soup when it does not have its shape; pass the same soup every
     /// frame and only positions are written.
     pub fn pose_into(&mut self, clip: usize, t: f32, out: &mut TriangleSoup) -> Result<()> {
-        check_clip(&self.clips, clip)?;
-        if !t.is_finite() {
-            return Err(VoxelError::Parameter(format!("pose time must be finite, got {t}")));
-        }
-        let duration = self.clips[clip].duration;
-        let t = if duration > 0.0 { t.rem_euclid(duration) } else { 0.0 };
+        self.sample_nodes(clip, t)?;
         let s = &mut self.scratch;
-        for (n, node) in self.nodes.iter().enumerate() {
-            s.local[n] = node.rest;
-            s.weights[n].copy_from_slice(&node.weights);
-        }
-        for ch in &self.channels[clip] {
-            s.value.resize(ch.sampler.width(), 0.0);
-            ch.sampler.sample(t, &mut s.value);
-            let v = &s.value;
-            let local = &mut s.local[ch.node];
-            match ch.target {
-                Target::Translation => local.translation = Vec3::from_slice(v),
-                Target::Rotation => local.rotation = Quat::from_slice(v),
-                Target::Scale => local.scale = Vec3::from_slice(v),
-                Target::Weights => s.weights[ch.node].copy_from_slice(v),
-            }
-        }
         for &n in &self.order {
             let node = &self.nodes[n];
             let local = node.matrix.unwrap_or_else(|| s.local[n].matrix());
@@ -318,6 +307,36 @@ impl AnimatedModel {
             }
         }
         Ok(())
+    }
+
+    /// Every node's local transform in clip `clip` at `t` seconds (wrapped into the clip), by node index: the
+    /// rest transform where no channel animates it (a `matrix` node keeps its rest TRS here). What a scene
+    /// graph that mirrors the file's nodes sets to play the clip; [`AnimatedModel::pose_into`] composes them.
+    pub fn sample_nodes(&mut self, clip: usize, t: f32) -> Result<&[Trs]> {
+        check_clip(&self.clips, clip)?;
+        if !t.is_finite() {
+            return Err(VoxelError::Parameter(format!("pose time must be finite, got {t}")));
+        }
+        let duration = self.clips[clip].duration;
+        let t = if duration > 0.0 { t.rem_euclid(duration) } else { 0.0 };
+        let s = &mut self.scratch;
+        for (n, node) in self.nodes.iter().enumerate() {
+            s.local[n] = node.rest;
+            s.weights[n].copy_from_slice(&node.weights);
+        }
+        for ch in &self.channels[clip] {
+            s.value.resize(ch.sampler.width(), 0.0);
+            ch.sampler.sample(t, &mut s.value);
+            let v = &s.value;
+            let local = &mut s.local[ch.node];
+            match ch.target {
+                Target::Translation => local.translation = Vec3::from_slice(v),
+                Target::Rotation => local.rotation = Quat::from_slice(v),
+                Target::Scale => local.scale = Vec3::from_slice(v),
+                Target::Weights => s.weights[ch.node].copy_from_slice(v),
+            }
+        }
+        Ok(&s.local)
     }
 
     /// The union of the bounds of clip `clip`'s poses, sampled at [`BOUNDS_SAMPLES_PER_SECOND`] (at most

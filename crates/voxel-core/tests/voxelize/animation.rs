@@ -297,6 +297,24 @@ fn the_grid_of_a_clip_keeps_its_size_and_place_while_the_model_grows() {
 }
 
 #[test]
+fn sampled_node_transforms_are_the_channels_values_and_the_rest_elsewhere() {
+    let mut model = load_animated_slice(&skinned_cube(&TURN_KEYS, "LINEAR", 0), None).unwrap();
+    assert_eq!(model.nodes().len(), 3);
+    let locals = model.sample_nodes(0, 0.5).unwrap().to_vec();
+    // Node 1 turns from identity to 90° about z over the first second: 45° half-way (slerp), at its rest place.
+    let half = glam::Quat::from_rotation_z(std::f32::consts::FRAC_PI_4);
+    assert!(locals[1].rotation.angle_between(half) < 1e-5, "{:?}", locals[1].rotation);
+    assert_eq!(locals[1].translation, glam::vec3(2.0, 0.0, 0.0));
+    // Nodes no channel moves keep their rest transform (the skinned node its translation by 100).
+    assert_eq!(locals[0].translation, glam::vec3(100.0, 0.0, 0.0));
+    assert_eq!((locals[2].rotation, locals[2].scale), (glam::Quat::IDENTITY, glam::Vec3::ONE));
+    // Time wraps into the clip as posing does.
+    let wrapped = model.sample_nodes(0, 2.5).unwrap()[1].rotation;
+    assert!(wrapped.angle_between(half) < 1e-5);
+    assert!(model.sample_nodes(1, 0.0).is_err() && model.sample_nodes(0, f32::NAN).is_err());
+}
+
+#[test]
 fn a_model_without_animations_has_no_clips_and_cannot_be_posed() {
     let mut b = Buffers::default();
     let (pos, idx, _) = b.cube();
@@ -305,6 +323,7 @@ fn a_model_without_animations_has_no_clips_and_cannot_be_posed() {
     assert!(model.clips().is_empty());
     assert_eq!(model.rest_soup().vertices, load_slice(&bytes, None).unwrap().vertices);
     assert!(model.pose_into(0, 0.0, &mut TriangleSoup::default()).is_err());
+    assert_eq!(model.into_rest_soup().vertices, load_slice(&bytes, None).unwrap().vertices);
 }
 
 /// Mean displacement between two poses of the corners whose bind position satisfies `select`.
