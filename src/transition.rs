@@ -134,8 +134,8 @@ pub struct VoxelTween {
     pub color_delay: f32,
     /// Seconds the colour change takes.
     pub color_duration: f32,
-    /// Its visibility follows the visible-count tween until then (0 for a voxel that shows throughout).
-    pub count_end: f32,
+    /// What decides whether it shows while it tweens.
+    pub show: TweenShow,
     /// Seconds since the transition started.
     pub elapsed: f32,
     /// Back-out overshoot.
@@ -144,10 +144,35 @@ pub struct VoxelTween {
     pub spin_end: f32,
 }
 
+/// What decides whether a tweening voxel shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TweenShow {
+    /// A morph's voxel: the visible-count tween (its slot below the count), until `end` seconds (0 for a
+    /// voxel that shows throughout).
+    Count {
+        /// Seconds until which the count decides.
+        end: f32,
+    },
+    /// A voxel popping in on a pose's new cell: shown throughout.
+    Shown,
+    /// A voxel popping out of a pose's emptied cell: shown until the tween ends, hidden then.
+    UntilEnd,
+}
+
 impl VoxelTween {
     /// When every part of the tween is over.
     pub fn end(&self) -> f32 {
-        (self.delay + self.duration).max(self.spin_end).max(self.color_delay + self.color_duration).max(self.count_end)
+        let count_end = if let TweenShow::Count { end } = self.show { end } else { 0.0 };
+        (self.delay + self.duration).max(self.spin_end).max(self.color_delay + self.color_duration).max(count_end)
+    }
+
+    /// Whether it shows now, given the visible-count tween's `shown` slots.
+    fn shows(&self, slot: u32, shown: f32) -> bool {
+        match self.show {
+            TweenShow::Count { .. } => (slot as f32) < shown,
+            TweenShow::Shown => true,
+            TweenShow::UntilEnd => self.elapsed < self.end(),
+        }
     }
 
     /// Position and scale at the tween's current time.
@@ -359,7 +384,7 @@ pub fn plan(
         color_to,
         color_delay,
         color_duration: settings.color_duration,
-        count_end,
+        show: TweenShow::Count { end: count_end },
         elapsed: 0.0,
         overshoot: settings.overshoot,
         spin_end: settings.spin_duration,
@@ -493,7 +518,7 @@ fn step(
                 tag.0 = color;
             }
         }
-        let visible = (slot.0 as f32) < shown;
+        let visible = tween.shows(slot.0, shown);
         visibility.set_if_neq(if visible { Visibility::Inherited } else { Visibility::Hidden });
         if tween.elapsed >= tween.end() {
             par_commands.command_scope(|mut commands| {

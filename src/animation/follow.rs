@@ -15,7 +15,7 @@ use crate::instancing::{
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
-use crate::transition::{ActiveTransition, TransitionSettings, TransitionStarted, VoxelTween, layout};
+use crate::transition::{ActiveTransition, TransitionSettings, TransitionStarted, TweenShow, VoxelTween, layout};
 
 use super::PosePlaced;
 
@@ -72,8 +72,7 @@ fn pop(position: Vec3, from: Vec3, to: Vec3, color: [u8; 4], out: bool) -> Voxel
         color_to: color,
         color_delay: 0.0,
         color_duration: POP_SECONDS,
-        show_at: None,
-        hide_at: out.then_some(POP_SECONDS),
+        show: if out { TweenShow::UntilEnd } else { TweenShow::Shown },
         elapsed: 0.0,
         overshoot: 0.0,
         spin_end: 0.0,

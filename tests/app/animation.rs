@@ -56,7 +56,7 @@ fn shown_cells(app: &App) -> HashMap<[u32; 3], Entity> {
 
 /// The cells of a model as shown (centre bits).
 fn model_cells(model: &VoxelModelAsset, hollow: bool) -> HashSet<[u32; 3]> {
-    model.shown(hollow).map(|v| model.center(v).map(f32::to_bits)).collect()
+    model.shown(hollow).map(|v| model.center(&v).map(f32::to_bits)).collect()
 }
 
 /// Steps until the pose placed last differs from `before` and is laid out.
@@ -109,7 +109,7 @@ fn the_pose_shown_is_the_cores_pose_in_the_clips_grid() {
     let shown = pose(&app).unwrap();
     assert_eq!(shown.spec, expected.spec);
     assert_eq!(shown.stats, expected.stats);
-    assert!(shown.voxels == expected.voxels, "other cells or colours than the core's pose");
+    assert!(shown.voxels().eq(expected.voxels()), "other cells or colours than the core's pose");
     // The voxels on screen are exactly the pose's cells.
     let hollow = app.world().resource::<VoxelSettings>().hollow;
     let cells = shown_cells(&app);
@@ -297,7 +297,7 @@ fn the_morph_cube_shows_its_weights_pose() {
     let expected = voxel_core::voxelize_within(&soup, &app_options(&app), bounds).unwrap();
     let shown = pose(&app).unwrap();
     assert_eq!((shown.spec, shown.stats), (expected.spec, expected.stats));
-    assert!(shown.voxels == expected.voxels, "other cells or colours than the core's pose");
+    assert!(shown.voxels().eq(expected.voxels()), "other cells or colours than the core's pose");
     let hollow = app.world().resource::<VoxelSettings>().hollow;
     assert_eq!(shown_cells(&app).keys().copied().collect::<HashSet<_>>(), model_cells(&shown, hollow));
 }
