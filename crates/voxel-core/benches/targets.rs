@@ -8,8 +8,10 @@
 //!
 //! `-- cold` instead measures what a fresh process pays before its first voxelization is as fast as the
 //! next ones: it starts itself once per sample (medians of 7) and reports the thread pool's start, the first
-//! voxelization and the warm median, and the overhead: pool start + first − warm (the pool's threads and
-//! the first touch of the allocations), each as wall time (CPU time).
+//! voxelization, the warm median of the same soup again (its part analysis cached) and of soups the process
+//! has not seen (what a fresh process's first voxelization does too), and the overhead: pool start + first −
+//! warm of a new soup (the pool's threads, the first touch of the allocations and of the code), each as wall
+//! time (CPU time).
 
 use std::path::Path;
 use std::process::Command;
@@ -60,9 +62,15 @@ fn median(mut values: Vec<f64>) -> f64 {
 
 /// One warm-up voxelization, then the medians of `runs`; also the grid of the last one.
 fn measure(soup: &TriangleSoup, options: &VoxelizeOptions, runs: usize) -> (Timing, [u32; 3]) {
-    let mut grid = voxelize(soup, options).expect("voxelize").stats.grid;
+    measure_each(soup, &vec![soup; runs], options)
+}
+
+/// One warm-up voxelization of `warm_up`, then the medians of one voxelization of each of `soups`; also the
+/// grid of the last one.
+fn measure_each(warm_up: &TriangleSoup, soups: &[&TriangleSoup], options: &VoxelizeOptions) -> (Timing, [u32; 3]) {
+    let mut grid = voxelize(warm_up, options).expect("voxelize").stats.grid;
     let (mut wall, mut cpu) = (Vec::new(), Vec::new());
-    for _ in 0..runs {
+    for soup in soups {
         let cpu_start = cpu::cpu_ns();
         let started = Instant::now();
         grid = voxelize(soup, options).expect("voxelize").stats.grid;
@@ -112,8 +120,19 @@ fn print_targets(name: &str, soup: &TriangleSoup) {
     );
 }
 
-/// In a fresh process: the thread pool's start, the first voxelization and the median of the next five, in
-/// ms of wall time, then the same in CPU time.
+/// `soup` scaled by 2^`k`: the same grid triangles exactly (the grid is fitted to the bounds), but a soup the
+/// voxelizer has not seen (its part analysis is not cached).
+fn scaled(soup: &TriangleSoup, k: i32) -> TriangleSoup {
+    let mut scaled = soup.clone();
+    for v in &mut scaled.vertices {
+        v.position = v.position.map(|c| c * 2f32.powi(k));
+    }
+    scaled
+}
+
+/// In a fresh process: the thread pool's start, the first voxelization, the median of the next five and that
+/// of five voxelizations of soups not seen before (copies scaled by powers of two), in ms of wall time, then
+/// the same in CPU time.
 fn cold_child(file: &Path, r: Option<u32>) {
     let soup = load_file(file).expect("load");
     let options = options(r, false);
@@ -123,19 +142,23 @@ fn cold_child(file: &Path, r: Option<u32>) {
     voxelize(&soup, &options).expect("voxelize");
     let (first_cpu, first) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3 - pool);
     let (warm, _) = measure(&soup, &options, 5);
+    let copies: Vec<TriangleSoup> = (1..=5).map(|k| scaled(&soup, k)).collect();
+    let (unseen, _) = measure_each(&soup, &copies.iter().collect::<Vec<_>>(), &options);
     let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 / 1e6;
     let (pool_cpu_ms, first_cpu_ms) = (ms(cpu_start, pool_cpu), ms(pool_cpu, first_cpu));
-    println!("{pool} {first} {} {pool_cpu_ms} {first_cpu_ms} {}", warm.wall, warm.cpu);
+    println!("{pool} {first} {} {} {pool_cpu_ms} {first_cpu_ms} {} {}", warm.wall, unseen.wall, warm.cpu, unseen.cpu);
 }
 
 /// The cold table: medians over fresh processes.
 fn print_cold(dir: &Path) {
-    println!("| model | grid | pool start ms | first voxelization ms | warm ms | cold overhead ms |");
-    println!("|---|---|---:|---:|---:|---:|");
+    println!(
+        "| model | grid | pool start ms | first voxelization ms | warm ms, same soup | warm ms, new soup | cold overhead ms |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|");
     let exe = std::env::current_exe().expect("the bench's path");
     for (model, r) in COLD_MODELS {
         let file = dir.join(model);
-        let samples: Vec<[f64; 6]> = (0..COLD_SAMPLES)
+        let samples: Vec<[f64; 8]> = (0..COLD_SAMPLES)
             .map(|_| {
                 let mut child = Command::new(&exe);
                 child.arg("cold-child").arg(&file).arg(r.map_or_else(|| "default".into(), |r| r.to_string()));
@@ -145,16 +168,16 @@ fn print_cold(dir: &Path) {
                 values.try_into().unwrap_or_else(|v| panic!("cold child printed {v:?}: {text}"))
             })
             .collect();
-        // Each as "wall (CPU)": a column's medians, and the overhead pool + first − warm per sample.
+        // Each as "wall (CPU)": a column's medians, and the overhead pool + first − warm (new soup) per sample.
         let cell = |k: usize| {
             let (wall, cpu) =
-                (median(samples.iter().map(|s| s[k]).collect()), median(samples.iter().map(|s| s[k + 3]).collect()));
+                (median(samples.iter().map(|s| s[k]).collect()), median(samples.iter().map(|s| s[k + 4]).collect()));
             Timing { wall, cpu }
         };
-        let overhead = |k: usize| median(samples.iter().map(|s| s[k] + s[k + 1] - s[k + 2]).collect());
-        let overhead = Timing { wall: overhead(0), cpu: overhead(3) };
+        let overhead = |k: usize| median(samples.iter().map(|s| s[k] + s[k + 1] - s[k + 3]).collect());
+        let overhead = Timing { wall: overhead(0), cpu: overhead(4) };
         let grid = r.map_or_else(|| "default".into(), |r| format!("R={r}"));
-        println!("| {model} | {grid} | {} | {} | {} | {overhead} |", cell(0), cell(1), cell(2));
+        println!("| {model} | {grid} | {} | {} | {} | {} | {overhead} |", cell(0), cell(1), cell(2), cell(3));
     }
 }
 

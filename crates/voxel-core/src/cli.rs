@@ -122,6 +122,9 @@ struct Report<'a> {
     output_voxels: usize,
     load_ms: f64,
     voxelize_ms: f64,
+    /// Time to write the export, when there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    write_ms: Option<f64>,
     #[serde(flatten)]
     exported: Exported,
 }
@@ -189,6 +192,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
     let t1 = Instant::now();
     let model = voxelize(&soup, options)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
+    let t2 = Instant::now();
     let exported = match &args.out {
         Some(out) => {
             if several {
@@ -202,6 +206,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
         }
         None => Exported::default(),
     };
+    let write_ms = args.out.as_ref().map(|_| t2.elapsed().as_secs_f64() * 1e3);
     let s = model.stats;
     let name = file.display().to_string();
     if args.json {
@@ -216,6 +221,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             output_voxels: model.len(),
             load_ms,
             voxelize_ms,
+            write_ms,
             exported,
         };
         serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
@@ -249,6 +255,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
 /// when any failed (each named on stderr as `error: <file>: <reason>`, after processing the others).
 pub fn execute(args: &VoxelizeArgs) -> i32 {
+    // Start the thread pool's workers now: they come up while the first file is read.
+    rayon::spawn(|| ());
     let options = args.options();
     let files = expand_inputs(&args.files);
     if files.is_empty() {
@@ -285,4 +293,35 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     }
     progress.finish_and_clear();
     i32::from(failed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::cuboid;
+    use crate::soup::TriangleSoup;
+
+    #[test]
+    fn the_json_line_times_the_write_only_when_there_is_one() {
+        let dir = std::env::temp_dir().join(format!("voxel-core-cli-write-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let input = dir.join("block.glb");
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [2.0, 1.0, 1.0]), [1.0; 4]);
+        std::fs::write(&input, crate::glb::soup_to_glb(&soup).unwrap()).unwrap();
+        let report = |extra: &[&str]| -> serde_json::Value {
+            let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "4", "--json"];
+            args.extend(extra);
+            let args = VoxelizeArgs::try_parse_from(args).unwrap();
+            serde_json::from_str(&process(&input, &args, &args.options(), false).unwrap()).unwrap()
+        };
+        let plain = report(&[]);
+        assert_eq!(plain["voxels"], 4 * 2 * 2);
+        assert!(plain.get("write_ms").is_none() && plain.get("vox").is_none(), "{plain}");
+        let vox = dir.join("block.vox");
+        let written = report(&["--out", vox.to_str().unwrap()]);
+        assert!(written["write_ms"].as_f64().unwrap() >= 0.0, "{written}");
+        assert_eq!(written["vox"], vox.display().to_string());
+        assert!(vox.is_file());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

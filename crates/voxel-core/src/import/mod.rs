@@ -67,7 +67,9 @@ fn import_with<T>(
         parts_of_mesh: HashMap::new(),
         instances: Vec::new(),
     };
-    for (node, transform) in scene_instances(&document)? {
+    let instances = scene_instances(&document)?;
+    builder.materials.prefetch(instances.iter().filter_map(|(node, _)| node.mesh()), &buffers);
+    for (node, transform) in instances {
         if let Some(mesh) = node.mesh() {
             builder.add_mesh(node.index(), &mesh, &transform)?;
         }
