@@ -1,12 +1,17 @@
 #!/usr/bin/env python3
 """Times voxel-art's voxelizer against Open3D's surface voxelizer on the same files and grids (on demand, not CI).
 
-voxel-art runs solid fill + shell + colour in a fresh CLI process per run and reports its `voxelize_ms`
-(import excluded; a fresh process also pays for starting its thread pool). Open3D runs
-`VoxelGrid.create_from_triangle_mesh` (surface only, no colour) in this process on the mesh it read once,
-with the voxel size that gives R cells along the longest axis, as our `--resolution R` does. Both take the
-best of N runs, interleaved so that load on a shared machine hits both alike. Prints a Markdown table with
-the ratio Open3D ms / voxel-art ms.
+Both sides run in a fresh process per run and time the same steps with their own clocks:
+* read: voxel-art's `load_ms` (file read, glTF parse, buffers, base-colour textures decoded) against Open3D's
+  `io.read_triangle_mesh` (Assimp: file read, parse, textures);
+* voxelize: voxel-art's `voxelize_ms` (solid fill + shell + colour, the first voxelization of the process; the
+  CLI starts its thread pool while it reads, so the pool's start falls in `read`) against Open3D's first
+  `VoxelGrid.create_from_triangle_mesh` (surface only, no colour) of the process, with the voxel size that
+  gives R cells along the longest axis, as our `--resolution R` does. Open3D's second call in the same
+  process is shown too (warm).
+Neither side's interpreter or library start is timed (Python + `import open3d` takes ~1 s); voxel-art's whole
+process (exec, load, voxelize, exit, timed from here) is shown as well. Best of N runs each, interleaved so
+that load on a shared machine hits both alike. Prints a Markdown table with the ratios Open3D ms / voxel-art ms.
 
     pip install open3d==0.20.0   # Debian also needs libusb-1.0-0 and libgomp1
     cargo build --release -p voxel-core --features cli --example voxelize
@@ -42,23 +47,51 @@ def corpus(models, filters):
 
 
 def ours(cli, path, r):
-    """One fresh CLI process: (voxelize_ms, output voxels)."""
+    """One fresh CLI process: {read, voxelize, process} ms and its output voxels."""
+    started = time.perf_counter()
     out = subprocess.run([cli, str(path), "--resolution", str(r), "--json"], capture_output=True, text=True,
                          check=True)
+    process_ms = (time.perf_counter() - started) * 1e3
     report = json.loads(out.stdout.splitlines()[0])
-    return report["voxelize_ms"], report["voxels"]
+    return {"read": report["load_ms"], "voxelize": report["voxelize_ms"], "process": process_ms,
+            "voxels": report["voxels"], "triangles": report["triangles"]}
 
 
-def theirs(o3d, mesh, r):
-    """One Open3D surface voxelization: (ms, voxels)."""
-    extent = max(mesh.get_max_bound() - mesh.get_min_bound())
+def theirs(path, r):
+    """One fresh Python process running `open3d_child`: {read, voxelize, warm} ms, voxels and triangles."""
+    out = subprocess.run([sys.executable, __file__, "--open3d-child", str(path), str(r)], capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+def open3d_child(path, r):
+    """In a fresh process: read the mesh and voxelize it twice, timing each; prints one JSON line."""
+    import open3d as o3d
+
+    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
     started = time.perf_counter()
-    grid = o3d.geometry.VoxelGrid.create_from_triangle_mesh(mesh, voxel_size=extent / r)
-    ms = (time.perf_counter() - started) * 1e3
-    return ms, len(grid.get_voxels())
+    mesh = o3d.io.read_triangle_mesh(path)
+    read_ms = (time.perf_counter() - started) * 1e3
+    if len(mesh.triangles) == 0:
+        print(json.dumps({"triangles": 0}))
+        return
+    extent = max(mesh.get_max_bound() - mesh.get_min_bound())
+    ms = []
+    for _ in range(2):
+        started = time.perf_counter()
+        grid = o3d.geometry.VoxelGrid.create_from_triangle_mesh(mesh, voxel_size=extent / r)
+        ms.append((time.perf_counter() - started) * 1e3)
+    print(json.dumps({"read": read_ms, "voxelize": ms[0], "warm": ms[1], "voxels": len(grid.get_voxels()),
+                      "triangles": len(mesh.triangles)}))
+
+
+def best(runs, key):
+    return min(run[key] for run in runs)
 
 
 def main():
+    if len(sys.argv) == 4 and sys.argv[1] == "--open3d-child":
+        return open3d_child(sys.argv[2], int(sys.argv[3]))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--models", type=Path, default=Path(default_models()))
     parser.add_argument("--cli", default=default_cli(), help="the voxel-art voxelize command (a binary path)")
@@ -68,28 +101,32 @@ def main():
     args = parser.parse_args()
     import open3d as o3d
 
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
     if not Path(args.cli).exists():
         sys.exit(f"error: {args.cli}: not found (cargo build --release -p voxel-core --features cli --example voxelize)")
     print(f"open3d {o3d.__version__}; best of {args.runs}; load average {os.getloadavg()[0]:.1f}")
-    print("| model | R | triangles | voxel-art voxels (solid) | Open3D voxels (surface) | voxel-art ms | "
-          "Open3D ms | Open3D / voxel-art |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("| model | R | triangles | voxel-art voxels (solid) | Open3D voxels (surface) | voxel-art voxelize ms | "
+          "Open3D voxelize ms (warm) | ratio | voxel-art read + voxelize ms | Open3D read + voxelize ms | ratio | "
+          "voxel-art process ms |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for path in corpus(args.models, args.filters):
         name = path.relative_to(args.models)
-        mesh = o3d.io.read_triangle_mesh(str(path))
-        if len(mesh.triangles) == 0:
-            print(f"| {name} | | | | skipped: Open3D read no triangles | | | |")
-            continue
         for r in args.resolution or [128]:
-            best_ours, best_theirs = float("inf"), float("inf")
+            mine, other = [], []
             for _ in range(args.runs):
-                ms, our_voxels = ours(args.cli, path, r)
-                best_ours = min(best_ours, ms)
-                ms, their_voxels = theirs(o3d, mesh, r)
-                best_theirs = min(best_theirs, ms)
-            print(f"| {name} | {r} | {len(mesh.triangles)} | {our_voxels} | {their_voxels} | {best_ours:.1f} | "
-                  f"{best_theirs:.1f} | {best_theirs / best_ours:.1f}× |", flush=True)
+                mine.append(ours(args.cli, path, r))
+                other.append(theirs(path, r))
+                if other[-1]["triangles"] == 0:
+                    break
+            if other[-1]["triangles"] == 0:
+                print(f"| {name} | {r} | | | skipped: Open3D read no triangles | | | | | | | |")
+                break
+            for runs in (mine, other):
+                for run in runs:
+                    run["total"] = run["read"] + run["voxelize"]
+            ov, tv, ot, tt = best(mine, "voxelize"), best(other, "voxelize"), best(mine, "total"), best(other, "total")
+            print(f"| {name} | {r} | {other[0]['triangles']} | {mine[0]['voxels']} | {other[0]['voxels']} | "
+                  f"{ov:.1f} | {tv:.1f} ({best(other, 'warm'):.1f}) | {tv / ov:.1f}× | {ot:.1f} | {tt:.1f} | "
+                  f"{tt / ot:.1f}× | {best(mine, 'process'):.1f} |", flush=True)
     print(f"load average after: {os.getloadavg()[0]:.1f}")
 
 

@@ -1,10 +1,11 @@
 //! MagicaVoxel .vox export (through dot_vox): colours quantized to at most 255 palette entries (median cut),
 //! grids over 256 cells per axis split into several models placed by a scene graph.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use dot_vox::{Color, DotVoxData, Frame, Model, SceneNode, ShapeModel, Size, Voxel as VoxVoxel};
+use rustc_hash::FxHashMap;
 
 use crate::error::{Result, VoxelError};
 use crate::voxelize::VoxelModel;
@@ -14,44 +15,50 @@ pub const MAX_MODEL_EDGE: u32 = 256;
 /// Usable palette entries (index 0 is reserved by the format).
 pub const MAX_COLORS: usize = 255;
 
-/// A box of colours for median cut: the colours with their voxel counts.
-struct ColorBox(Vec<([u8; 3], usize)>);
+/// A box of colours for median cut: the colours with their voxel counts, and its widest channel with that
+/// channel's range.
+struct ColorBox {
+    colors: Vec<([u8; 3], usize)>,
+    widest: (usize, u8),
+}
 
 impl ColorBox {
-    fn range(&self, channel: usize) -> u8 {
-        let (lo, hi) = self.0.iter().fold((255u8, 0u8), |(lo, hi), (c, _)| (lo.min(c[channel]), hi.max(c[channel])));
-        hi.saturating_sub(lo)
-    }
-
-    fn widest_channel(&self) -> (usize, u8) {
-        (0..3).map(|c| (c, self.range(c))).max_by_key(|&(c, r)| (r, std::cmp::Reverse(c))).unwrap_or((0, 0))
+    fn new(colors: Vec<([u8; 3], usize)>) -> Self {
+        let range = |channel: usize| {
+            let (lo, hi) =
+                colors.iter().fold((255u8, 0u8), |(lo, hi), (c, _)| (lo.min(c[channel]), hi.max(c[channel])));
+            hi.saturating_sub(lo)
+        };
+        let widest = (0..3).map(|c| (c, range(c))).max_by_key(|&(c, r)| (r, std::cmp::Reverse(c))).unwrap_or((0, 0));
+        Self { colors, widest }
     }
 
     fn mean(&self) -> [u8; 3] {
-        let total: usize = self.0.iter().map(|(_, n)| n).sum::<usize>().max(1);
+        let total: usize = self.colors.iter().map(|(_, n)| n).sum::<usize>().max(1);
         std::array::from_fn(|ch| {
-            let sum: usize = self.0.iter().map(|(c, n)| usize::from(c[ch]) * n).sum();
+            let sum: usize = self.colors.iter().map(|(c, n)| usize::from(c[ch]) * n).sum();
             ((sum + total / 2) / total) as u8
         })
     }
 }
 
-/// Reduces `histogram` (colour → voxel count) to at most `max` colours by median cut. Returns the palette
-/// and the palette index of every input colour. Deterministic; exact when there are few enough colours.
-pub fn quantize(histogram: &BTreeMap<[u8; 3], usize>, max: usize) -> (Vec<[u8; 3]>, HashMap<[u8; 3], usize>) {
+/// Reduces `histogram` (distinct colours in ascending order, each with its voxel count) to at most `max`
+/// colours by median cut. Returns the palette and the palette index of every input colour. Deterministic;
+/// exact when there are few enough colours.
+pub fn quantize(histogram: &[([u8; 3], usize)], max: usize) -> (Vec<[u8; 3]>, FxHashMap<[u8; 3], usize>) {
     if histogram.len() <= max {
-        let palette: Vec<[u8; 3]> = histogram.keys().copied().collect();
+        let palette: Vec<[u8; 3]> = histogram.iter().map(|&(c, _)| c).collect();
         let index = palette.iter().enumerate().map(|(i, &c)| (c, i)).collect();
         return (palette, index);
     }
-    let mut boxes = vec![ColorBox(histogram.iter().map(|(&c, &n)| (c, n)).collect())];
+    let mut boxes = vec![ColorBox::new(histogram.to_vec())];
     while boxes.len() < max {
         // Split the box with the widest channel range (ties: the most populous), at its weighted median.
         let Some((k, (channel, range))) = boxes
             .iter()
             .enumerate()
-            .filter(|(_, b)| b.0.len() > 1)
-            .map(|(k, b)| (k, b.widest_channel()))
+            .filter(|(_, b)| b.colors.len() > 1)
+            .map(|(k, b)| (k, b.widest))
             .max_by_key(|&(k, (_, r))| (r, std::cmp::Reverse(k)))
         else {
             break;
@@ -59,7 +66,7 @@ pub fn quantize(histogram: &BTreeMap<[u8; 3], usize>, max: usize) -> (Vec<[u8; 3
         if range == 0 {
             break;
         }
-        let mut colors = std::mem::take(&mut boxes[k].0);
+        let mut colors = std::mem::take(&mut boxes[k].colors);
         colors.sort_by_key(|(c, _)| (c[channel], *c));
         let total: usize = colors.iter().map(|(_, n)| n).sum();
         let mut acc = 0;
@@ -72,11 +79,11 @@ pub fn quantize(histogram: &BTreeMap<[u8; 3], usize>, max: usize) -> (Vec<[u8; 3
             }
         }
         let upper = colors.split_off(cut);
-        boxes[k] = ColorBox(colors);
-        boxes.push(ColorBox(upper));
+        boxes[k] = ColorBox::new(colors);
+        boxes.push(ColorBox::new(upper));
     }
     let palette: Vec<[u8; 3]> = boxes.iter().map(ColorBox::mean).collect();
-    let index = boxes.iter().enumerate().flat_map(|(i, b)| b.0.iter().map(move |(c, _)| (*c, i))).collect();
+    let index = boxes.iter().enumerate().flat_map(|(i, b)| b.colors.iter().map(move |(c, _)| (*c, i))).collect();
     (palette, index)
 }
 
@@ -93,21 +100,26 @@ pub struct VoxSummary {
 
 /// Converts a voxel model to MagicaVoxel data (z up: our y becomes MagicaVoxel's z).
 pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
-    let mut histogram = BTreeMap::new();
-    for v in model.voxels() {
-        *histogram.entry([v.color[0], v.color[1], v.color[2]]).or_insert(0usize) += 1;
+    // The voxels once (interior colours are found on demand): their cells and colours, then the colours' counts.
+    let voxels: Vec<([u16; 3], [u8; 3])> =
+        model.voxels().map(|v| (v.cell, [v.color[0], v.color[1], v.color[2]])).collect();
+    let mut counts: FxHashMap<[u8; 3], usize> = FxHashMap::default();
+    for (_, color) in &voxels {
+        *counts.entry(*color).or_insert(0) += 1;
     }
+    let mut histogram: Vec<([u8; 3], usize)> = counts.into_iter().collect();
+    histogram.sort_unstable();
     let (palette, index) = quantize(&histogram, MAX_COLORS);
     // Group voxels into 256³ blocks, in block order.
     let mut blocks: BTreeMap<[u32; 3], Vec<VoxVoxel>> = BTreeMap::new();
-    for v in model.voxels() {
-        let (x, y, z) = (u32::from(v.cell[0]), u32::from(v.cell[2]), u32::from(v.cell[1]));
+    for (cell, color) in &voxels {
+        let (x, y, z) = (u32::from(cell[0]), u32::from(cell[2]), u32::from(cell[1]));
         let key = [x / MAX_MODEL_EDGE, y / MAX_MODEL_EDGE, z / MAX_MODEL_EDGE];
         blocks.entry(key).or_default().push(VoxVoxel {
             x: (x % MAX_MODEL_EDGE) as u8,
             y: (y % MAX_MODEL_EDGE) as u8,
             z: (z % MAX_MODEL_EDGE) as u8,
-            i: index[&[v.color[0], v.color[1], v.color[2]]] as u8,
+            i: index[color] as u8,
         });
     }
     let dims = [model.spec.dims[0], model.spec.dims[2], model.spec.dims[1]];
@@ -174,7 +186,7 @@ mod tests {
 
     #[test]
     fn few_colours_are_kept_exactly() {
-        let h: BTreeMap<[u8; 3], usize> = [([1, 2, 3], 5), ([200, 0, 0], 1)].into_iter().collect();
+        let h = [([1, 2, 3], 5), ([200, 0, 0], 1)];
         let (palette, index) = quantize(&h, 255);
         assert_eq!(palette.len(), 2);
         assert_eq!(palette[index[&[200, 0, 0]]], [200, 0, 0]);
@@ -182,8 +194,9 @@ mod tests {
 
     #[test]
     fn many_colours_are_cut_to_the_limit_and_stay_close() {
-        let h: BTreeMap<[u8; 3], usize> =
+        let mut h: Vec<([u8; 3], usize)> =
             (0..4096u32).map(|i| ([(i % 16 * 16) as u8, (i / 16 % 16 * 16) as u8, (i / 256 * 16) as u8], 1)).collect();
+        h.sort_unstable();
         let (palette, index) = quantize(&h, 255);
         assert!(palette.len() <= 255 && palette.len() > 200, "{}", palette.len());
         for (c, &i) in &index {
