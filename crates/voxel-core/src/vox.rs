@@ -1,7 +1,6 @@
 //! MagicaVoxel .vox export (through dot_vox): colours quantized to at most 255 palette entries (median cut),
 //! grids over 256 cells per axis split into several models placed by a scene graph.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use dot_vox::{Color, DotVoxData, Frame, Model, SceneNode, ShapeModel, Size, Voxel as VoxVoxel};
@@ -103,26 +102,31 @@ pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
     // The voxels once (interior colours are found on demand): their cells and colours, then the colours' counts.
     let voxels: Vec<([u16; 3], [u8; 3])> =
         model.voxels().map(|v| (v.cell, [v.color[0], v.color[1], v.color[2]])).collect();
+    // Consecutive voxels mostly share a colour (a run's interior cells take its ends'): count by such stretches.
     let mut counts: FxHashMap<[u8; 3], usize> = FxHashMap::default();
-    for (_, color) in &voxels {
-        *counts.entry(*color).or_insert(0) += 1;
+    for same in voxels.chunk_by(|a, b| a.1 == b.1) {
+        *counts.entry(same[0].1).or_insert(0) += same.len();
     }
     let mut histogram: Vec<([u8; 3], usize)> = counts.into_iter().collect();
     histogram.sort_unstable();
     let (palette, index) = quantize(&histogram, MAX_COLORS);
-    // Group voxels into 256³ blocks, in block order.
-    let mut blocks: BTreeMap<[u32; 3], Vec<VoxVoxel>> = BTreeMap::new();
-    for (cell, color) in &voxels {
-        let (x, y, z) = (u32::from(cell[0]), u32::from(cell[2]), u32::from(cell[1]));
-        let key = [x / MAX_MODEL_EDGE, y / MAX_MODEL_EDGE, z / MAX_MODEL_EDGE];
-        blocks.entry(key).or_default().push(VoxVoxel {
-            x: (x % MAX_MODEL_EDGE) as u8,
-            y: (y % MAX_MODEL_EDGE) as u8,
-            z: (z % MAX_MODEL_EDGE) as u8,
-            i: index[color] as u8,
-        });
-    }
+    // Group voxels into 256³ blocks, numbered in (x, y, z) block order.
     let dims = [model.spec.dims[0], model.spec.dims[2], model.spec.dims[1]];
+    let per_axis = dims.map(|d| d.div_ceil(MAX_MODEL_EDGE) as usize);
+    let mut blocks: Vec<Vec<VoxVoxel>> = vec![Vec::new(); per_axis.iter().product()];
+    for same in voxels.chunk_by(|a, b| a.1 == b.1) {
+        let i = index[&same[0].1] as u8;
+        for (cell, _) in same {
+            let [x, y, z] = [cell[0], cell[2], cell[1]].map(u32::from);
+            let [bx, by, bz] = [x, y, z].map(|c| (c / MAX_MODEL_EDGE) as usize);
+            blocks[(bx * per_axis[1] + by) * per_axis[2] + bz].push(VoxVoxel {
+                x: (x % MAX_MODEL_EDGE) as u8,
+                y: (y % MAX_MODEL_EDGE) as u8,
+                z: (z % MAX_MODEL_EDGE) as u8,
+                i,
+            });
+        }
+    }
     let mut models = Vec::new();
     let mut scenes = vec![
         SceneNode::Transform {
@@ -133,7 +137,9 @@ pub fn to_dot_vox(model: &VoxelModel) -> (DotVoxData, VoxSummary) {
         },
         SceneNode::Group { attributes: Default::default(), children: Vec::new() },
     ];
-    for (key, voxels) in blocks {
+    for (block, voxels) in blocks.into_iter().enumerate().filter(|(_, voxels)| !voxels.is_empty()) {
+        let key = [block / (per_axis[1] * per_axis[2]), block / per_axis[2] % per_axis[1], block % per_axis[2]]
+            .map(|k| k as u32);
         let size: [u32; 3] = std::array::from_fn(|a| (dims[a] - key[a] * MAX_MODEL_EDGE).min(MAX_MODEL_EDGE));
         // MagicaVoxel places a model by its centre; keep the whole grid centred on the origin.
         let t: [i64; 3] =
