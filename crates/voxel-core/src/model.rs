@@ -112,7 +112,7 @@ impl VoxelModel {
 
     /// The visible voxels, ascending by (x, y, z).
     pub fn visible_voxels(&self) -> impl Iterator<Item = Voxel> + '_ {
-        self.visible.iter().zip(&self.colors).map(|(&i, &color)| self.voxel(i as usize, color, true))
+        self.visible.iter().zip(&self.colors).map(|(&i, &color)| self.voxel(self.spec.coords(i as usize), color, true))
     }
 
     /// Every output voxel, ascending by (x, y, z): the visible ones when hollow, else every filled cell.
@@ -124,13 +124,16 @@ impl VoxelModel {
             let first = self.visible.partition_point(|&v| (v as usize) < run.start);
             let last = self.visible.partition_point(|&v| (v as usize) < run.end) - 1;
             let mut next = first;
+            // A run lies in one column: only z changes along it (no division per cell).
+            let [x, y, z0] = self.spec.coords(run.start);
             run.clone().map(move |i| {
+                let cell = [x, y, z0 + (i - run.start) as u32];
                 if self.visible.get(next).is_some_and(|&v| v as usize == i) {
                     next += 1;
-                    return self.voxel(i, self.colors[next - 1], true);
+                    return self.voxel(cell, self.colors[next - 1], true);
                 }
                 let end = if i - run.start <= run.end - 1 - i { first } else { last };
-                self.voxel(i, self.colors[end], false)
+                self.voxel(cell, self.colors[end], false)
             })
         }))
     }
@@ -139,7 +142,7 @@ impl VoxelModel {
     /// voxel and returns its new colour.
     pub fn recolor(&mut self, mut f: impl FnMut(&Voxel) -> [u8; 4]) {
         for k in 0..self.visible.len() {
-            let v = self.voxel(self.visible[k] as usize, self.colors[k], true);
+            let v = self.voxel(self.spec.coords(self.visible[k] as usize), self.colors[k], true);
             self.colors[k].0 = f(&v);
         }
     }
@@ -166,9 +169,9 @@ impl VoxelModel {
         Self::new(spec, stats, Vec::new(), Some(solid), visible, colors)
     }
 
-    /// The voxel of cell `index`.
-    fn voxel(&self, index: usize, (color, part): ([u8; 4], u32), visible: bool) -> Voxel {
-        Voxel { cell: self.spec.coords(index).map(|c| c as u16), color, part, visible }
+    /// The voxel of the cell at `cell`.
+    fn voxel(&self, cell: [u32; 3], (color, part): ([u8; 4], u32), visible: bool) -> Voxel {
+        Voxel { cell: cell.map(|c| c as u16), color, part, visible }
     }
 }
 
