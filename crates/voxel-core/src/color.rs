@@ -90,18 +90,20 @@ fn round_to_u8(x: f32) -> u8 {
 /// The colour of triangle `t` at barycentric weights `w`: base colour factor × COLOR_0 × base-colour
 /// texture, as sRGB RGBA8.
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
-    let corners = soup.triangle(t);
+    let [a, b, c] = [0, 1, 2].map(|k| &soup.triangle(t)[k]);
     let material = soup.material_of(t);
-    let w = w.map(|w| w as f32);
-    // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + a = a, exactly).
-    let lerp = |v: [f32; 3]| w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
-    let mut rgba: [f32; 4] =
-        std::array::from_fn(|c| material.base_color[c] * lerp([0, 1, 2].map(|k| corners[k].color[c])));
+    let [w0, w1, w2] = w.map(|w| w as f32);
+    // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).
+    let lerp = |x: f32, y: f32, z: f32| w0 * x + w1 * y + w2 * z;
+    let mut rgba = [0.0f32; 4];
+    for (ch, out) in rgba.iter_mut().enumerate() {
+        *out = material.base_color[ch] * lerp(a.color[ch], b.color[ch], c.color[ch]);
+    }
     if let Some(binding) = &material.texture {
-        let uv = [0, 1].map(|c| lerp([0, 1, 2].map(|k| corners[k].uv[c])));
+        let uv = [lerp(a.uv[0], b.uv[0], c.uv[0]), lerp(a.uv[1], b.uv[1], c.uv[1])];
         let texel = binding.texture.sample_nearest(uv, binding.wrap);
-        for c in 0..3 {
-            rgba[c] *= srgb_to_linear(texel[c]);
+        for ch in 0..3 {
+            rgba[ch] *= srgb_to_linear(texel[ch]);
         }
         rgba[3] *= f32::from(texel[3]) / 255.0;
     }
