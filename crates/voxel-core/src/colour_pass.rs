@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
-use crate::grid::GridSpec;
+use crate::grid::{AscendingCoords, GridSpec};
 use crate::shell::{Shell, ShellOctree};
 use crate::soup::TriangleSoup;
 
@@ -71,29 +71,6 @@ fn centre(c: [u32; 3]) -> DVec3 {
     DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
 }
 
-/// The coordinates of ascending cells, from the previous cell's without a division when both lie in one
-/// column (as most neighbouring visible cells do).
-struct CellCoords<'a> {
-    spec: &'a GridSpec,
-    /// The last cell and its coordinates.
-    last: Option<(u32, [u32; 3])>,
-}
-
-impl CellCoords<'_> {
-    /// The coordinates of cell `i`, which is above every cell asked before.
-    fn of(&mut self, i: u32) -> [u32; 3] {
-        let c = match self.last {
-            Some((j, mut c)) if i - j < self.spec.dims[2] - c[2] => {
-                c[2] += i - j;
-                c
-            }
-            _ => self.spec.coords(i as usize),
-        };
-        self.last = Some((i, c));
-        c
-    }
-}
-
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
 /// face lies), else of the whole model. Cells that far from the surface only occur where an open mesh leaves
@@ -120,7 +97,7 @@ pub(crate) fn surface_colors(
         .enumerate()
         .flat_map_iter(|(task, (out, chunk))| {
             let mut far = Vec::new();
-            let mut coords = CellCoords { spec, last: None };
+            let mut coords = AscendingCoords::new(spec);
             let mut k = shell.cells.partition_point(|&c| c < chunk[0]);
             for (n, (color, &i)) in out.iter_mut().zip(chunk).enumerate() {
                 while shell.cells.get(k).is_some_and(|&c| c < i) {
@@ -225,27 +202,6 @@ mod tests {
             }
         }
         assert_eq!(position_near(&[], 0, 4), None);
-    }
-
-    #[test]
-    fn coordinates_stepped_along_a_column_match_the_division() {
-        let spec = GridSpec::fit(
-            &TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [5.0, 3.0, 7.0]), [1.0; 4]),
-            9.0,
-            crate::GridSize::Resolution(7),
-            1.0,
-            1 << 26,
-        )
-        .unwrap();
-        assert_eq!(spec.dims, [5, 3, 7]);
-        let mut coords = CellCoords { spec: &spec, last: None };
-        // Every cell, then every third cell, then cells straddling column ends.
-        for cells in [(0..105).collect::<Vec<u32>>(), (0..105).step_by(3).collect(), vec![5, 6, 7, 13, 14, 21, 104]] {
-            coords.last = None;
-            for i in cells {
-                assert_eq!(coords.of(i), spec.coords(i as usize), "cell {i}");
-            }
-        }
     }
 
     #[test]
