@@ -45,9 +45,9 @@ fn nearest_among(
     best.map(|(t, _, w)| (t, w))
 }
 
-/// The position of `target` in the ascending `cells`, if there, searched outwards from position `k` (a
-/// galloping search: the cost grows with the log of the distance).
-fn position_near(cells: &[u32], k: usize, target: u32) -> Option<usize> {
+/// The position of `target` in the ascending `cells` (`Ok`), or where it would be inserted (`Err`), searched
+/// outwards from position `k` (a galloping search: the cost grows with the log of the distance).
+fn search_near(cells: &[u32], k: usize, target: u32) -> Result<usize, usize> {
     let (mut lo, mut hi) = (k.min(cells.len()), k.min(cells.len()));
     let mut step = 1;
     if cells.get(k).is_some_and(|&c| c < target) {
@@ -63,7 +63,7 @@ fn position_near(cells: &[u32], k: usize, target: u32) -> Option<usize> {
     }
     // Now cells[..lo] < target and cells[hi..] >= target or hi is the end.
     let at = lo + cells[lo..hi].partition_point(|&c| c < target);
-    (cells.get(at) == Some(&target)).then_some(at)
+    if cells.get(at) == Some(&target) { Ok(at) } else { Err(at) }
 }
 
 /// The centre of a cell in grid coordinates.
@@ -99,6 +99,9 @@ pub(crate) fn surface_colors(
             let mut far = Vec::new();
             let mut coords = AscendingCoords::new(spec);
             let mut k = shell.cells.partition_point(|&c| c < chunk[0]);
+            // Where the last search for each face neighbour ended: the neighbours of ascending cells ascend,
+            // so each search gallops a short way from there.
+            let mut face_at = [k; 6];
             for (n, (color, &i)) in out.iter_mut().zip(chunk).enumerate() {
                 while shell.cells.get(k).is_some_and(|&c| c < i) {
                     k += 1;
@@ -109,8 +112,12 @@ pub(crate) fn surface_colors(
                     // One candidate is the nearest: no distance to compare.
                     [t] => Some((t as usize, closest_point_barycentric(p, &tris[t as usize]))),
                     _ => nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
-                        let faces = FACE_STEPS.into_iter().filter_map(|step| spec.offset(i as usize, step));
-                        let near = faces.filter_map(|n| position_near(&shell.cells, k, n as u32));
+                        let faces = FACE_STEPS.into_iter().zip(&mut face_at);
+                        let near = faces.filter_map(|(step, at)| {
+                            let found = search_near(&shell.cells, *at, spec.offset(i as usize, step)? as u32);
+                            *at = found.unwrap_or_else(|insert| insert);
+                            found.ok()
+                        });
                         let candidates = near.flat_map(|at| shell.triangles_at(at).iter().map(|&t| t as usize));
                         nearest_among(tris, p, candidates)
                     }),
@@ -190,18 +197,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn galloping_finds_exactly_the_cells_present_from_any_start() {
+    fn galloping_finds_the_cells_present_and_the_insertion_points_from_any_start() {
         let cells: Vec<u32> = (0..300).map(|k| k * 8 + k % 7).collect();
         for k in 0..=cells.len() {
             for target in 0..cells[cells.len() - 1] + 5 {
-                assert_eq!(
-                    position_near(&cells, k, target),
-                    cells.binary_search(&target).ok(),
-                    "from {k} for {target}"
-                );
+                assert_eq!(search_near(&cells, k, target), cells.binary_search(&target), "from {k} for {target}");
             }
         }
-        assert_eq!(position_near(&[], 0, 4), None);
+        assert_eq!(search_near(&[], 0, 4), Err(0));
     }
 
     #[test]
