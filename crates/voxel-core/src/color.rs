@@ -45,7 +45,7 @@ const SRGB_SLICES: usize = 4096;
 struct SrgbThresholds {
     /// `thresholds[k]`, k ≥ 1: the smallest f32 that the formula maps to k or more (`thresholds[0]` = 0).
     thresholds: [f32; 256],
-    /// The formula's value at the start of each slice, `s / 4096`.
+    /// The number of thresholds at or below the start of each slice, `s / 4096` (the formula's value there).
     at_slice: [u8; SRGB_SLICES],
 }
 
@@ -66,7 +66,15 @@ impl SrgbThresholds {
             }
             *threshold = t;
         }
-        let at_slice = std::array::from_fn(|s| linear_to_srgb_formula(s as f32 / SRGB_SLICES as f32));
+        // The count of thresholds at or below each slice's start (the thresholds ascend).
+        let mut count = 0u8;
+        let at_slice = std::array::from_fn(|s| {
+            let start = s as f32 / SRGB_SLICES as f32;
+            while count < 255 && thresholds[usize::from(count) + 1] <= start {
+                count += 1;
+            }
+            count
+        });
         Self { thresholds, at_slice }
     }
 }
