@@ -89,8 +89,8 @@ pub(crate) fn surface_colors(
 ) -> Vec<([u8; 4], u32)> {
     let colour_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
     let mut colors = vec![NO_COLOUR; visible.len()];
-    // Each task walks its visible cells and the shell's cells side by side, and finds a neighbour's shell
-    // cell by galloping from where the walk is; it returns the positions of the cells it could not colour.
+    // Each task walks its visible cells and the shell's cells side by side, colours each cell at once, and
+    // returns the positions of the cells it could not colour.
     let far: Vec<usize> = colors
         .par_chunks_mut(CELLS_PER_TASK)
         .zip(visible.par_chunks(CELLS_PER_TASK))
@@ -131,8 +131,8 @@ pub(crate) fn surface_colors(
         })
         .collect();
     if !far.is_empty() {
-        let far_colors = colour_far_cells(spec, tris, shell, bvh, far.iter().map(|&n| visible[n]));
-        for (n, nearest) in far.into_iter().zip(far_colors) {
+        let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
+        for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, bvh, &cells)) {
             colors[n] = nearest.map_or(NO_COLOUR, colour_at);
         }
     }
@@ -141,12 +141,12 @@ pub(crate) fn surface_colors(
 
 /// The nearest triangle of nonzero area to each of `cells` and the barycentric weights of its closest point,
 /// through a BVH or a shell octree (see [`surface_colors`]).
-fn colour_far_cells(
+fn nearest_far(
     spec: &GridSpec,
     tris: &[GridTriangle],
     shell: &Shell,
     bvh: &OnceLock<TriangleBvh>,
-    cells: impl Iterator<Item = u32>,
+    cells: &[u32],
 ) -> Vec<Option<(usize, [f64; 3])>> {
     let far: Box<dyn Fn(DVec3) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
         let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
@@ -159,7 +159,6 @@ fn colour_far_cells(
         let octree = ShellOctree::new(spec, shell);
         Box::new(move |p| octree.nearest(tris, p))
     };
-    let cells: Vec<u32> = cells.collect();
     cells
         .par_iter()
         .map(|&i| {
