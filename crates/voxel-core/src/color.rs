@@ -17,35 +17,44 @@ pub fn srgb_to_linear(c: u8) -> f32 {
 
 /// Linear component → sRGB-encoded 8-bit: exactly [`linear_to_srgb_formula`] (the sRGB curve in f32 with
 /// `powf`, rounded), looked up instead of computed. The formula is non-decreasing in `c`, so its value is the
-/// number of the 255 thresholds `t₁ < … < t₂₅₅` (tₖ: the smallest f32 it maps to k or more) that are ≤ `c`;
-/// a table over 4096 equal slices of [0, 1] gives that count at the start of `c`'s slice, and the thresholds
-/// inside the slice (at most two: the curve rises by at most 0.81 per slice) are compared one by one.
+/// number of the 255 thresholds `t₁ ≤ … ≤ t₂₅₅` (tₖ: the smallest f32 it maps to k or more) that are ≤ `c`.
+/// The f32s from 2⁻¹³ to 1 fall into 1,664 slices by the top 16 bits of their encoding (the exponent and 7
+/// bits of the mantissa: each slice spans 1/128 of its start); a table gives the count at the start of `c`'s
+/// slice, and the thresholds inside the slice (at most one or two: the curve rises by at most 0.9 per slice)
+/// are compared one by one. Below 2⁻¹³ the formula gives 0.
 pub fn linear_to_srgb(c: f32) -> u8 {
     static TABLES: LazyLock<SrgbThresholds> = LazyLock::new(SrgbThresholds::new);
-    // Negative values and NaN encode as 0, values from 1 up as 255 (the formula's clamp and saturating cast).
-    if c.is_nan() || c <= 0.0 {
-        return 0;
+    let bits = c.to_bits();
+    // From 1 up, negative values and NaN (sign bit set, or above +∞'s encoding): the formula's clamp and
+    // saturating cast give 255 and 0.
+    if bits >= 1f32.to_bits() {
+        return if c >= 1.0 { 255 } else { 0 };
     }
-    if c >= 1.0 {
-        return 255;
-    }
+    let Some(slice) = (bits >> SRGB_SLICE_SHIFT).checked_sub(SRGB_FIRST_SLICE) else {
+        return 0; // below 2⁻¹³ (zero included), under the first threshold (checked by the tests)
+    };
     let tables = &*TABLES;
-    // c × 4096 is exact (a power of two), so the slice is ⌊4096 c⌋ and its start is ≤ c.
-    let mut k = tables.at_slice[(c * SRGB_SLICES as f32) as usize];
+    let mut k = tables.at_slice[slice as usize];
     while k < 255 && c >= tables.thresholds[usize::from(k) + 1] {
         k += 1;
     }
     k
 }
 
-/// Slices of [0, 1] in the table of [`linear_to_srgb`].
-const SRGB_SLICES: usize = 4096;
+/// The low bits of an f32's encoding that a slice of [`linear_to_srgb`]'s table spans.
+const SRGB_SLICE_SHIFT: u32 = 16;
+
+/// The first slice: the one starting at 2⁻¹³.
+const SRGB_FIRST_SLICE: u32 = (127 - 13) << (23 - SRGB_SLICE_SHIFT);
+
+/// Slices from 2⁻¹³ up to 1.
+const SRGB_SLICES: usize = (1f32.to_bits() >> SRGB_SLICE_SHIFT) as usize - SRGB_FIRST_SLICE as usize;
 
 /// The tables of [`linear_to_srgb`].
 struct SrgbThresholds {
     /// `thresholds[k]`, k ≥ 1: the smallest f32 that the formula maps to k or more (`thresholds[0]` = 0).
     thresholds: [f32; 256],
-    /// The number of thresholds at or below the start of each slice, `s / 4096` (the formula's value there).
+    /// The number of thresholds at or below the start of each slice (the formula's value there).
     at_slice: [u8; SRGB_SLICES],
 }
 
@@ -69,7 +78,7 @@ impl SrgbThresholds {
         // The count of thresholds at or below each slice's start (the thresholds ascend).
         let mut count = 0u8;
         let at_slice = std::array::from_fn(|s| {
-            let start = s as f32 / SRGB_SLICES as f32;
+            let start = f32::from_bits((s as u32 + SRGB_FIRST_SLICE) << SRGB_SLICE_SHIFT);
             while count < 255 && thresholds[usize::from(count) + 1] <= start {
                 count += 1;
             }
@@ -208,17 +217,23 @@ mod tests {
         }
         let specials = [f32::NAN, -f32::NAN, -1.0, -0.0, 0.0, 1e-45, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY];
         assert!(specials.into_iter().all(table_matches));
-        // Every slice start and a million evenly spaced values.
-        assert!((0..SRGB_SLICES).all(|s| table_matches(s as f32 / SRGB_SLICES as f32)));
+        // Every slice's start and end, and a million evenly spaced values; below the first slice, 0.
+        assert_eq!(f32::from_bits(SRGB_FIRST_SLICE << SRGB_SLICE_SHIFT), 2f32.powi(-13));
+        assert!(tables.thresholds[1] > 2f32.powi(-13), "{}", tables.thresholds[1]);
+        let start = |s: usize| f32::from_bits((s as u32 + SRGB_FIRST_SLICE) << SRGB_SLICE_SHIFT);
+        assert_eq!(start(SRGB_SLICES), 1.0);
+        assert!(
+            (0..=SRGB_SLICES).all(|s| table_matches(start(s)) && table_matches(f32::from_bits(start(s).to_bits() - 1)))
+        );
         assert!((0..=1_000_000).all(|i| table_matches(i as f32 / 1e6)));
     }
 
-    /// Every f32 in [0, 1] (about 2³⁰ values): `cargo test -p voxel-core --release -- --ignored`.
+    /// Every f32, NaNs included (2³² values): `cargo test -p voxel-core --release -- --ignored`.
     #[test]
     #[ignore = "exhaustive, about a minute in release"]
-    fn the_srgb_table_is_the_formula_for_every_f32_up_to_one() {
-        let mismatch = (0..=1f32.to_bits()).map(f32::from_bits).find(|&c| !table_matches(c));
-        assert_eq!(mismatch, None);
+    fn the_srgb_table_is_the_formula_for_every_f32() {
+        let mismatch = (0..=u32::MAX).map(f32::from_bits).find(|&c| !table_matches(c));
+        assert_eq!(mismatch.map(f32::to_bits), None);
     }
 
     #[test]
