@@ -14,6 +14,15 @@
 //! FILL (`winding` or `parity`), for an instruction count:
 //! under `valgrind --tool=cachegrind --cache-sim=no` with `RAYON_NUM_THREADS=1`, (Ir at N − Ir at 0) / N is
 //! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
+//!
+//! `cargo bench -p voxel-core --bench voxelize -- pass-runs NAME R N` voxelizes the first model whose name
+//! contains NAME N times at R (solid, default settings) and prints the median fill, shell and colour pass
+//! times; nothing else runs, so under cachegrind (as for `fill-runs`) (Ir at N − Ir at 0) / N is one
+//! voxelization's instructions.
+//!
+//! `cargo bench -p voxel-core --bench voxelize -- hashes` prints, per model, a hash of every output voxel
+//! (cell, colour, part, visibility) at the default grid and R = 64, 128, 256, solid and hollow, plus the
+//! default grid with the pastel remap: two builds that print the same lines give the same cells and colours.
 
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
@@ -88,6 +97,23 @@ fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
     }
 }
 
+/// Prints the output hashes of one model: solid and hollow at the default grid and R = 64, 128, 256, and
+/// pastel at the default grid.
+fn print_hashes(name: &str, soup: &TriangleSoup) {
+    let grids = [GridSize::default(), GridSize::Resolution(64), GridSize::Resolution(128), GridSize::Resolution(256)];
+    let runs = grids.iter().flat_map(|&grid| [false, true].map(|hollow| (grid, hollow, false)));
+    let line: Vec<String> = runs
+        .chain([(GridSize::default(), false, true)])
+        .map(|(grid, hollow, pastel)| {
+            let options = VoxelizeOptions { grid, hollow, pastel, ..Default::default() };
+            let mut hasher = std::hash::DefaultHasher::new();
+            voxelize(soup, &options).expect("voxelize").voxels().for_each(|v| v.hash(&mut hasher));
+            format!("{:016x}", hasher.finish())
+        })
+        .collect();
+    println!("{name}: {}", line.join(" "));
+}
+
 /// Calls `f` with the name (relative to `dir`) and soup of every model of `files` that loads.
 fn for_each_model(files: &[PathBuf], dir: &std::path::Path, f: impl Fn(&str, &TriangleSoup)) {
     for file in files {
@@ -136,6 +162,24 @@ fn main() {
         for (r, hasher) in resolutions.iter().zip(&hashers) {
             println!("R={r}: output hash {:016x}", hasher.finish());
         }
+        return;
+    }
+    if let Some(at) = args.iter().position(|a| a == "pass-runs") {
+        let [name, r, n] = [1, 2, 3].map(|k| args.get(at + k).expect("pass-runs NAME R N").as_str());
+        let options = VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), ..Default::default() };
+        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
+        let soup = load_file(file).expect("load");
+        let times: Vec<PassTimes> =
+            (0..n.parse().expect("N")).map(|_| voxelize_timed(&soup, &options).expect("voxelize").1).collect();
+        if !times.is_empty() {
+            let passes: [fn(&PassTimes) -> Duration; 3] = [|t| t.fill, |t| t.shell, |t| t.color];
+            let [fill, shell, color] = passes.map(|pass| median_ms(times.iter().map(pass).collect()));
+            println!("{name} R={r}: fill {fill:.2} ms, shell {shell:.2} ms, colour {color:.2} ms (medians of {n})");
+        }
+        return;
+    }
+    if std::env::args().skip(1).any(|a| a == "hashes") {
+        for_each_model(&files, &dir, print_hashes);
         return;
     }
     if std::env::args().skip(1).any(|a| a == "fill-cost") {

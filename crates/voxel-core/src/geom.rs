@@ -133,6 +133,7 @@ impl BoxTester {
 }
 
 /// The closest point of triangle `t` to `p`, as barycentric weights of its corners (Ericson, RTCD 5.1.5).
+#[inline]
 pub fn closest_point_barycentric(p: DVec3, t: &GridTriangle) -> [f64; 3] {
     let [a, b, c] = *t;
     let (ab, ac, ap) = (b - a, c - a, p - a);

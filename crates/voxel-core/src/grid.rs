@@ -355,6 +355,35 @@ impl BitGrid {
     }
 }
 
+/// The coordinates of ascending cells, each from the previous one's without a division when both lie in
+/// one column (as most neighbouring surface cells do).
+pub(crate) struct AscendingCoords<'a> {
+    spec: &'a GridSpec,
+    /// The last cell and its coordinates.
+    last: Option<(u32, [u32; 3])>,
+}
+
+impl<'a> AscendingCoords<'a> {
+    /// Coordinates in `spec`'s grid, from no cell yet.
+    pub fn new(spec: &'a GridSpec) -> Self {
+        Self { spec, last: None }
+    }
+
+    /// The coordinates of cell `i`, which is above every cell asked before.
+    #[inline]
+    pub fn of(&mut self, i: u32) -> [u32; 3] {
+        let c = match self.last {
+            Some((j, mut c)) if i - j < self.spec.dims[2] - c[2] => {
+                c[2] += i - j;
+                c
+            }
+            _ => self.spec.coords(i as usize),
+        };
+        self.last = Some((i, c));
+        c
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -420,5 +449,25 @@ mod tests {
         assert_eq!(b.runs(0..200).collect::<Vec<_>>(), vec![60..70, 100..164, 199..200]);
         assert_eq!(b.runs(65..120).collect::<Vec<_>>(), vec![65..70, 100..120]);
         assert_eq!(b.runs(70..100).count(), 0);
+    }
+
+    #[test]
+    fn coordinates_stepped_along_a_column_match_the_division() {
+        let spec = GridSpec::fit(
+            &TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [5.0, 3.0, 7.0]), [1.0; 4]),
+            9.0,
+            GridSize::Resolution(7),
+            1.0,
+            1 << 26,
+        )
+        .unwrap();
+        assert_eq!(spec.dims, [5, 3, 7]);
+        // Every cell, then every third cell, then cells straddling column ends.
+        for cells in [(0..105).collect::<Vec<u32>>(), (0..105).step_by(3).collect(), vec![5, 6, 7, 13, 14, 21, 104]] {
+            let mut coords = AscendingCoords::new(&spec);
+            for i in cells {
+                assert_eq!(coords.of(i), spec.coords(i as usize), "cell {i}");
+            }
+        }
     }
 }

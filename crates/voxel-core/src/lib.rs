@@ -15,6 +15,7 @@ pub mod cli;
 #[cfg(feature = "cli")]
 pub mod cli_animation;
 pub mod color;
+mod colour_pass;
 pub mod error;
 pub mod export;
 mod fill;

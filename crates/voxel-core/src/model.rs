@@ -4,7 +4,7 @@
 
 use std::borrow::Cow;
 
-use crate::grid::{BitGrid, GridSpec};
+use crate::grid::{AscendingCoords, BitGrid, GridSpec};
 
 /// One filled cell, as the model's iterators hand it out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -112,38 +112,29 @@ impl VoxelModel {
 
     /// The visible voxels, ascending by (x, y, z).
     pub fn visible_voxels(&self) -> impl Iterator<Item = Voxel> + '_ {
-        self.visible.iter().zip(&self.colors).map(|(&i, &color)| self.voxel(self.spec.coords(i as usize), color, true))
+        let mut coords = AscendingCoords::new(&self.spec);
+        self.visible.iter().zip(&self.colors).map(move |(&i, &(color, part))| Voxel {
+            cell: coords.of(i).map(|c| c as u16),
+            color,
+            part,
+            visible: true,
+        })
     }
 
     /// Every output voxel, ascending by (x, y, z): the visible ones when hollow, else every filled cell.
     pub fn voxels(&self) -> Box<dyn Iterator<Item = Voxel> + Send + '_> {
-        let Some(solid) = &self.solid else { return Box::new(self.visible_voxels()) };
-        let [nx, ny, nz] = self.spec.dims.map(|d| d as usize);
-        Box::new((0..nx * ny).flat_map(move |col| solid.runs(col * nz..(col + 1) * nz)).flat_map(move |run| {
-            // The run's ends are its first and last visible cells.
-            let first = self.visible.partition_point(|&v| (v as usize) < run.start);
-            let last = self.visible.partition_point(|&v| (v as usize) < run.end) - 1;
-            let mut next = first;
-            // A run lies in one column: only z changes along it (no division per cell).
-            let [x, y, z0] = self.spec.coords(run.start);
-            run.clone().map(move |i| {
-                let cell = [x, y, z0 + (i - run.start) as u32];
-                if self.visible.get(next).is_some_and(|&v| v as usize == i) {
-                    next += 1;
-                    return self.voxel(cell, self.colors[next - 1], true);
-                }
-                let end = if i - run.start <= run.end - 1 - i { first } else { last };
-                self.voxel(cell, self.colors[end], false)
-            })
-        }))
+        match &self.solid {
+            Some(solid) => Box::new(SolidVoxels::new(self, solid)),
+            None => Box::new(self.visible_voxels()),
+        }
     }
 
     /// Recolours the visible cells (interior cells follow the ends of their runs): `f` gets each visible
     /// voxel and returns its new colour.
     pub fn recolor(&mut self, mut f: impl FnMut(&Voxel) -> [u8; 4]) {
-        for k in 0..self.visible.len() {
-            let v = self.voxel(self.spec.coords(self.visible[k] as usize), self.colors[k], true);
-            self.colors[k].0 = f(&v);
+        let mut coords = AscendingCoords::new(&self.spec);
+        for (&i, (color, part)) in self.visible.iter().zip(&mut self.colors) {
+            *color = f(&Voxel { cell: coords.of(i).map(|c| c as u16), color: *color, part: *part, visible: true });
         }
     }
 
@@ -168,10 +159,75 @@ impl VoxelModel {
         let stats = VoxelStats { grid: spec.dims, voxels: solid.count(), visible: visible.len(), ..Default::default() };
         Self::new(spec, stats, Vec::new(), Some(solid), visible, colors)
     }
+}
 
-    /// The voxel of the cell at `cell`.
-    fn voxel(&self, cell: [u32; 3], (color, part): ([u8; 4], u32), visible: bool) -> Voxel {
-        Voxel { cell: cell.map(|c| c as u16), color, part, visible }
+/// The voxels of a solid model, ascending: the filled runs of each column, their cells visible or
+/// interior ([`VoxelModel::voxels`]).
+///
+/// The visible cells are filled, so each lies in a run, and the runs come ascending: a run's first cell is
+/// the next visible cell, and its last one is visible too, at most the run's length further on.
+struct SolidVoxels<'a> {
+    model: &'a VoxelModel,
+    solid: &'a BitGrid,
+    /// The column being walked (x · ny + y), its x and y, and where its next run is looked for.
+    column: usize,
+    xy: [u16; 2],
+    scan: usize,
+    /// The current run, `start..end`, and the next cell of it to yield.
+    start: usize,
+    end: usize,
+    at: usize,
+    /// Positions in `visible` of the run's first and last cells, and of the next visible cell.
+    first: usize,
+    last: usize,
+    next: usize,
+}
+
+impl<'a> SolidVoxels<'a> {
+    fn new(model: &'a VoxelModel, solid: &'a BitGrid) -> Self {
+        let (xy, first, last, next) = ([0, 0], 0, 0, 0);
+        Self { model, solid, column: 0, xy, scan: 0, start: 0, end: 0, at: 0, first, last, next }
+    }
+
+    /// Moves to the next run; false at the end of the grid.
+    fn next_run(&mut self) -> bool {
+        let [nx, ny, nz] = self.model.spec.dims.map(|d| d as usize);
+        while self.column < nx * ny {
+            let column_end = (self.column + 1) * nz;
+            if let Some(run) = self.solid.runs(self.scan..column_end).next() {
+                let visible = &self.model.visible;
+                debug_assert_eq!(visible.get(self.next).map(|&v| v as usize), Some(run.start));
+                let within = &visible[self.next..(self.next + run.len()).min(visible.len())];
+                let last = self.next + within.partition_point(|&v| (v as usize) < run.end) - 1;
+                (self.first, self.last) = (self.next, last);
+                (self.start, self.end, self.at, self.scan) = (run.start, run.end, run.start, run.end);
+                return true;
+            }
+            self.column += 1;
+            self.scan = column_end;
+            let [x, y] = self.xy;
+            self.xy = if usize::from(y) + 1 == ny { [x + 1, 0] } else { [x, y + 1] };
+        }
+        false
+    }
+}
+
+impl Iterator for SolidVoxels<'_> {
+    type Item = Voxel;
+
+    fn next(&mut self) -> Option<Voxel> {
+        if self.at == self.end && !self.next_run() {
+            return None;
+        }
+        let i = self.at;
+        self.at += 1;
+        let visible = self.model.visible.get(self.next).is_some_and(|&v| v as usize == i);
+        // An interior cell takes the colour of the nearer end of its run (the lower one on a tie).
+        let end = if i - self.start <= self.end - 1 - i { self.first } else { self.last };
+        let (color, part) = self.model.colors[if visible { self.next } else { end }];
+        self.next += usize::from(visible);
+        let z = (i - self.column * self.model.spec.dims[2] as usize) as u16;
+        Some(Voxel { cell: [self.xy[0], self.xy[1], z], color, part, visible })
     }
 }
 
@@ -200,6 +256,53 @@ mod tests {
         // The middle column's run is z = 0…5: z = 1, 2 are nearer (or as near as) its bottom, 3, 4 its top.
         assert_eq!(interior, vec![([1, 1, 1], 0), ([1, 1, 2], 0), ([1, 1, 3], 50), ([1, 1, 4], 50)]);
         assert!(all.iter().filter(|v| v.visible).eq(m.visible_voxels().collect::<Vec<_>>().iter()));
+    }
+
+    #[test]
+    fn solid_voxels_follow_the_runs_of_every_column() {
+        // 5 × 4 × 9 cells: the even-x columns have a gap at z = 4 (two runs), column (1, 1) is empty, and the
+        // colour of a cell is its z and x.
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [5.0, 4.0, 9.0]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(9), 1.0, 1 << 26).unwrap();
+        assert_eq!(spec.dims, [5, 4, 9]);
+        let gap = |c: [u16; 3]| c[0].is_multiple_of(2) && c[2] == 4;
+        let filled = |c: [u16; 3]| !(gap(c) || c[0] == 1 && c[1] == 1);
+        let cells: Vec<[u16; 3]> = (0..5u16)
+            .flat_map(|x| (0..4u16).flat_map(move |y| (0..9u16).map(move |z| [x, y, z])))
+            .filter(|&c| filled(c))
+            .collect();
+        let own = |c: [u16; 3]| [c[2] as u8 * 10 + c[0] as u8, 0, 0, 255];
+        let m = VoxelModel::from_cells(spec, cells.iter().map(|&c| (c, own(c))));
+        // The expected voxels: a visible cell has its own colour, an interior one that of the nearer end of
+        // its run along z (the lower end on a tie).
+        let expected: Vec<Voxel> = cells
+            .iter()
+            .map(|&c| {
+                let at = |dz: i32| {
+                    let z = i32::from(c[2]) + dz;
+                    (0..9).contains(&z) && filled([c[0], c[1], z as u16])
+                };
+                let sides = [[1, 0], [-1, 0], [0, 1], [0, -1]].map(|[dx, dy]| {
+                    let (x, y) = (i32::from(c[0]) + dx, i32::from(c[1]) + dy);
+                    (0..5).contains(&x) && (0..4).contains(&y) && filled([x as u16, y as u16, c[2]])
+                });
+                let visible = !(at(-1) && at(1) && sides.iter().all(|&s| s));
+                let (mut lo, mut hi) = (c[2], c[2]);
+                while lo > 0 && filled([c[0], c[1], lo - 1]) {
+                    lo -= 1;
+                }
+                while hi < 8 && filled([c[0], c[1], hi + 1]) {
+                    hi += 1;
+                }
+                let end = if c[2] - lo <= hi - c[2] { lo } else { hi };
+                let color = if visible { own(c) } else { own([c[0], c[1], end]) };
+                Voxel { cell: c, color, part: 0, visible }
+            })
+            .collect();
+        assert!(expected.iter().any(|v| !v.visible), "the test has interior cells");
+        let mut voxels = m.voxels();
+        assert_eq!(voxels.by_ref().collect::<Vec<_>>(), expected);
+        assert_eq!(voxels.next(), None, "still none after the end");
     }
 
     #[test]

@@ -22,6 +22,9 @@ impl Wrap {
     /// Maps a texel coordinate (any integer) into `0..size`.
     pub fn apply(self, texel: i64, size: u32) -> u32 {
         let n = i64::from(size.max(1));
+        if (0..n).contains(&texel) {
+            return texel as u32; // every mode keeps a texel inside the image (and skips the division)
+        }
         let t = match self {
             Wrap::Repeat => texel.rem_euclid(n),
             Wrap::ClampToEdge => texel.clamp(0, n - 1),
@@ -56,13 +59,18 @@ impl Texture {
 
     /// The texel nearest to `uv` (glTF convention: v grows downwards), with the given wrap modes.
     pub fn sample_nearest(&self, uv: [f32; 2], wrap: [Wrap; 2]) -> [u8; 4] {
-        let fx = (uv[0] * self.width as f32).floor();
-        let fy = (uv[1] * self.height as f32).floor();
-        // Saturating float-to-int casts keep NaN and huge coordinates in range.
-        let x = wrap[0].apply(fx as i64, self.width);
-        let y = wrap[1].apply(fy as i64, self.height);
+        let x = wrap[0].apply(floor_to_i64(uv[0] * self.width as f32), self.width);
+        let y = wrap[1].apply(floor_to_i64(uv[1] * self.height as f32), self.height);
         self.rgba[y as usize * self.width as usize + x as usize]
     }
+}
+
+/// `x.floor() as i64` (saturating, NaN to 0) without a libm call: the cast truncates towards zero, exactly
+/// (an f32 of magnitude 2²³ or more is a whole number), and a negative fraction steps down one.
+#[inline]
+fn floor_to_i64(x: f32) -> i64 {
+    let whole = x as i64;
+    if whole as f32 > x { whole.saturating_sub(1) } else { whole }
 }
 
 /// A base-colour texture bound to a material: the image plus its sampler's wrap modes.
@@ -228,6 +236,10 @@ mod tests {
         assert_eq!(Wrap::MirroredRepeat.apply(4, 4), 3);
         assert_eq!(Wrap::MirroredRepeat.apply(5, 4), 2);
         assert_eq!(Wrap::MirroredRepeat.apply(-1, 4), 0);
+        for mode in [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::ClampToEdge] {
+            assert_eq!((0..4).map(|t| mode.apply(t, 4)).collect::<Vec<_>>(), [0, 1, 2, 3], "{mode:?}");
+            assert_eq!(mode.apply(0, 0), 0, "{mode:?}");
+        }
     }
 
     #[test]
@@ -239,6 +251,21 @@ mod tests {
         assert_eq!(tex.sample_nearest([0.25, 0.75], w)[0], 3);
         assert_eq!(tex.sample_nearest([1.75, -0.25], w)[0], 4);
         assert_eq!(tex.sample_nearest([f32::NAN, 0.0], w)[0], 1);
+    }
+
+    #[test]
+    fn floor_without_libm_matches_floor_everywhere() {
+        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MAX, f32::MIN, 0.0, -0.0, 1e-40];
+        values.extend([2f32.powi(63), -2f32.powi(63), 2f32.powi(23) + 1.0, -(2f32.powi(24)) - 2.0]);
+        let mut state = 99u32;
+        for _ in 0..100_000 {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let x = f32::from_bits(state);
+            values.extend([x, x.fract(), (state >> 8) as f32 / 4096.0 - 2048.0]);
+        }
+        for x in values {
+            assert_eq!(floor_to_i64(x), x.floor() as i64, "{x}");
+        }
     }
 
     #[test]
