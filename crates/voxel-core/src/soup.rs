@@ -2,9 +2,10 @@
 //!
 //! Both front doors produce it: the `gltf`-crate importer ([`crate::import`]) and the app's Bevy asset reader.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use crate::error::{Result, VoxelError};
+use crate::orient::SoupParts;
 
 /// How texture coordinates outside [0, 1] are mapped (glTF sampler wrap modes).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -117,6 +118,10 @@ impl Vertex {
 }
 
 /// World-space triangles grouped into parts, with their materials.
+///
+/// The corners are read with [`TriangleSoup::vertices`] and changed only through
+/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`], so that what the soup keeps about its
+/// positions (the winding fill's closed parts, found once for every grid) never outlives them.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
     /// Materials referenced by parts.
@@ -124,9 +129,11 @@ pub struct TriangleSoup {
     /// Parts referenced by triangles.
     pub parts: Vec<Part>,
     /// Three vertices per triangle.
-    pub vertices: Vec<Vertex>,
+    vertices: Vec<Vertex>,
     /// The part of each triangle.
     pub triangle_parts: Vec<u32>,
+    /// The closed parts of `vertices`' positions, found when first needed; emptied whenever they can change.
+    closed_parts: OnceLock<SoupParts>,
 }
 
 impl TriangleSoup {
@@ -144,8 +151,25 @@ impl TriangleSoup {
 
     /// Adds a triangle to part `part`.
     pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
+        self.closed_parts.take();
         self.vertices.extend_from_slice(&corners);
         self.triangle_parts.push(part);
+    }
+
+    /// The corners, three per triangle.
+    pub fn vertices(&self) -> &[Vertex] {
+        &self.vertices
+    }
+
+    /// The corners, to change (a new pose, an edited mesh): forgets what the soup knew about its positions.
+    pub fn vertices_mut(&mut self) -> &mut [Vertex] {
+        self.closed_parts.take();
+        &mut self.vertices
+    }
+
+    /// The closed parts of the soup's positions (the winding fill's part analysis), found on the first call.
+    pub(crate) fn closed_parts(&self) -> &SoupParts {
+        self.closed_parts.get_or_init(|| SoupParts::of(self))
     }
 
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.

@@ -178,7 +178,7 @@ impl SoupBuilder<'_> {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
         for (decoded, prim) in prims.iter().enumerate() {
-            let first_vertex = self.soup.vertices.len();
+            let first_vertex = self.soup.vertices().len();
             self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world: Vec<[f32; 3]> = prim
