@@ -12,10 +12,12 @@
 //!
 //! # Parts
 //!
-//! Corners are welded by their exact grid-space position (the positions the column test sees). A *sheet*
-//! is a set of triangles connected through manifold edges (edges used by exactly two triangles); the walk
-//! over those edges orients it consistently (each triangle keeps or reverses its corner order; the sheet
-//! takes the orientation most of its triangles have in the file) unless a cycle contradicts itself. A
+//! Corners are welded by their exact position (the soup's own, once per soup: see `soup_parts`; a grid's
+//! where its snapping welds two of the soup's positions), numbering the positions. A *sheet* is a set of
+//! triangles connected through manifold edges (edges used by exactly two triangles, found by bucketing the
+//! corners by their edge's ends: see `edges`); a walk over those edges orients it consistently (each
+//! triangle keeps or reverses its corner order; the sheet takes the orientation most of its triangles have
+//! in the file) unless a cycle contradicts itself. A
 //! sheet is *open* when it cannot be oriented or has a border edge (used once); a non-manifold edge (used
 //! three or more times) must be walked equally often in both directions by the sheets meeting there,
 //! otherwise they are all open (repeated until every edge balances). The sheets left form closed surfaces;
@@ -56,7 +58,7 @@ use robust::{Coord, orient2d};
 
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
-use edges::{Edges, ascends, has_area};
+use edges::{Edges, SAME_DIRECTION, ascends, has_area};
 
 pub(crate) use soup_parts::{SoupParts, closed_parts};
 
@@ -137,15 +139,15 @@ pub(crate) struct Parts {
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
-        let welded = weld::weld(3 * tris.len(), |c| weld::grid_key(tris[c / 3][c % 3]));
-        Self::of_welded(&welded.id, welded.first.len())
+        let welded = weld::weld(3 * tris.len(), tris.iter().flatten().map(|&v| weld::grid_key(v)));
+        Self::of_welded(&welded.id)
     }
 
-    /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
-    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle
+    /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`.
+    /// Depends only on which corners share a position and on the triangle
     /// order: ties and non-manifold edges are decided in triangle and corner order.
-    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
-        let edges = Edges::of(id, positions);
+    pub(crate) fn of_welded(id: &[u32]) -> Self {
+        let edges = Edges::of(id);
         let mut sheets = Sheets::of(id, &edges.partner);
         for &c in &edges.border {
             let s = sheets.of[c as usize / 3] as usize;
@@ -223,7 +225,7 @@ struct Sheets {
 }
 
 impl Sheets {
-    /// Walks the triangles (corners at positions `id`) across their manifold edges (`partner`), numbering
+    /// Walks the triangles (corners at positions `id`) across their manifold edges ([`Edges::partner`]), numbering
     /// the sheets in order of their first triangle, and orients each as most of its triangles are in the
     /// file (on a tie, as its first triangle is). Two triangles walking their shared edge the same way
     /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
@@ -241,13 +243,12 @@ impl Sheets {
             sheets.of[first] = s;
             stack.push(first as u32);
             while let Some(t) = stack.pop() {
-                for c in 3 * t..3 * t + 3 {
-                    let p = partner[c as usize];
+                for &p in &partner[3 * t as usize..3 * t as usize + 3] {
                     if p == NO_PART {
                         continue;
                     }
-                    let (u, reversed) =
-                        (p as usize / 3, sheets.reversed[t as usize] ^ (id[c as usize] == id[p as usize]));
+                    let u = (p & !SAME_DIRECTION) as usize / 3;
+                    let reversed = sheets.reversed[t as usize] ^ (p & SAME_DIRECTION != 0);
                     if sheets.of[u] == NO_PART {
                         sheets.of[u] = s;
                         sheets.reversed[u] = reversed;

@@ -29,16 +29,13 @@ impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
-        let welded = weld(corners.len(), |c| soup_key(corners[c].position));
-        Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
+        let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
+        Self { parts: Arc::new(Parts::of_welded(&welded.id)), first: welded.first }
     }
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
     fn kept_apart_by(&self, tris: &[GridTriangle]) -> bool {
-        let on_grid = |p: usize| {
-            let c = self.first[p] as usize;
-            grid_key(tris[c / 3][c % 3])
-        };
+        let on_grid = self.first.iter().map(|&c| grid_key(tris[c as usize / 3][c as usize % 3]));
         weld(self.first.len(), on_grid).first.len() == self.first.len()
     }
 }

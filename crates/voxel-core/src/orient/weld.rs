@@ -10,46 +10,57 @@ pub(crate) struct Welded {
     pub first: Vec<u32>,
 }
 
-/// A position as bits: a grid-space corner's, or a soup corner's (its f32 bits widened).
-pub(crate) type PositionKey = [u64; 3];
-
 /// A grid-space position's key (−0 and +0 alike).
-pub(crate) fn grid_key(v: DVec3) -> PositionKey {
+pub(crate) fn grid_key(v: DVec3) -> [u64; 3] {
     [v.x, v.y, v.z].map(|c| (c + 0.0).to_bits())
 }
 
 /// A soup position's key (−0 and +0 alike).
-pub(crate) fn soup_key(p: [f32; 3]) -> PositionKey {
-    p.map(|c| u64::from((c + 0.0).to_bits()))
+pub(crate) fn soup_key(p: [f32; 3]) -> [u32; 3] {
+    p.map(|c| (c + 0.0).to_bits())
 }
 
-/// A 64-bit mix (splitmix64's finalizer).
-fn mix(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
+/// A position key whose bits a multiplicative hash spreads over its top bits.
+pub(crate) trait Key: Copy + Eq {
+    /// The key's hash: its top bits pick the slot.
+    fn hash(&self) -> u64;
 }
 
-/// Welds the `count` corners whose positions `key` gives: one pass through an open-addressing table twice
-/// their number, each slot holding a position's number; equal keys are found exactly (the hash only picks
-/// where to look first).
-pub(crate) fn weld(count: usize, key: impl Fn(usize) -> PositionKey) -> Welded {
-    let bits = (2 * count).next_power_of_two().max(2).ilog2();
+impl Key for [u32; 3] {
+    fn hash(&self) -> u64 {
+        let xy = u64::from(self[0]) | (u64::from(self[1]) << 32);
+        (xy.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ u64::from(self[2])).wrapping_mul(0xbf58_476d_1ce4_e5b9)
+    }
+}
+
+impl Key for [u64; 3] {
+    fn hash(&self) -> u64 {
+        let xy = self[0] ^ self[1].rotate_left(32);
+        (xy.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ self[2]).wrapping_mul(0xbf58_476d_1ce4_e5b9)
+    }
+}
+
+/// Welds corners by their keys, given in corner order (`count` of them): one pass through an
+/// open-addressing table of position numbers, at most two-thirds full; equal keys are found exactly (the
+/// hash only picks where to look first), each position's key kept once, densely.
+pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
+    let bits = (count + count / 2).next_power_of_two().max(2).ilog2();
     let mut slots = vec![u32::MAX; 1 << bits];
     let mask = slots.len() - 1;
+    let mut distinct: Vec<K> = Vec::new();
     let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::new() };
-    for c in 0..count {
-        let k = key(c);
-        let mut slot = (mix(mix(k[0] ^ k[1].rotate_left(32)) ^ k[2]) >> (64 - bits)) as usize;
+    for (c, key) in keys.enumerate() {
+        let mut slot = (key.hash() >> (64 - bits)) as usize;
         let id = loop {
             match slots[slot] {
                 u32::MAX => {
-                    let id = welded.first.len() as u32;
+                    let id = distinct.len() as u32;
                     slots[slot] = id;
+                    distinct.push(key);
                     welded.first.push(c as u32);
                     break id;
                 }
-                id if key(welded.first[id as usize] as usize) == k => break id,
+                id if distinct[id as usize] == key => break id,
                 _ => slot = (slot + 1) & mask,
             }
         };
@@ -65,11 +76,11 @@ mod tests {
     #[test]
     fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
         let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
-        let welded = weld(corners.len(), |c| soup_key(corners[c]));
+        let welded = weld(corners.len(), corners.iter().map(|&p| soup_key(p)));
         assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
         // Many keys, few distinct: the table's probing finds every repeat.
         let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
-        let welded = weld(many.len(), |c| grid_key(many[c]));
+        let welded = weld(many.len(), many.iter().map(|&p| grid_key(p)));
         assert_eq!(welded.first.len(), 97 * 89);
         assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
     }
