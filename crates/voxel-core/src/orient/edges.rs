@@ -1,8 +1,11 @@
 //! The edges of welded triangles: which corners walk the same edge.
 //!
 //! Corner `c` is the start of edge `c % 3` of triangle `c / 3`, which runs to the triangle's next corner.
-//! An edge is known by its two ends' position numbers; one pass through an open-addressing table numbers
-//! the edges in order of their first corner and counts the corners walking each.
+//! The corners are bucketed by their edge's lower end (one counting pass and one scatter: the position
+//! numbers are small integers), and in each bucket, a handful of corners, those with the same higher end
+//! walk the same edge.
+
+use std::ops::Range;
 
 use super::NO_PART;
 
@@ -31,124 +34,93 @@ pub(crate) struct Edges {
     /// Each corner's partner on a manifold edge (walked by exactly two corners), or'ed with
     /// [`SAME_DIRECTION`] when both walk it the same way; else [`NO_PART`].
     pub partner: Vec<u32>,
-    /// Corners alone on their edge (a border), ascending.
+    /// Corners alone on their edge (a border).
     pub border: Vec<u32>,
-    /// The corners of the non-manifold edges (walked three or more times): ascending within an edge, the
-    /// edges in order of their first corner.
+    /// The corners of the non-manifold edges (walked three or more times), ascending within an edge.
     corners: Vec<u32>,
-    /// Where each non-manifold edge's corners start in `corners` (and, last, their end).
-    starts: Vec<u32>,
+    /// Each non-manifold edge's corners in `corners`, in order of their first corner.
+    groups: Vec<Range<u32>>,
 }
 
-/// What is known of an edge while the corners are counted.
-#[derive(Clone, Copy)]
-struct Edge {
-    /// Its ends' position numbers, lower first, as one key.
-    ends: u64,
-    /// The first two corners walking it.
-    corners: [u32; 2],
-    /// Whether its first corner walks it from the lower end.
-    ascending: bool,
-    /// How many corners walk it.
-    count: u32,
-}
-
-/// The edges of triangles, numbered in order of their first corner: an open-addressing table of edge
-/// numbers, at most half full.
-struct EdgeTable {
-    slots: Vec<u32>,
-    bits: u32,
-    edges: Vec<Edge>,
-}
-
-impl EdgeTable {
-    fn new(corners: usize) -> Self {
-        let bits = (2 * corners).next_power_of_two().max(2).ilog2();
-        Self { slots: vec![u32::MAX; 1 << bits], bits, edges: Vec::with_capacity(corners / 2 + 1) }
-    }
-
-    /// The number of the edge with ends `ends`, added (walked by no corner yet) when new.
-    fn number(&mut self, ends: u64) -> u32 {
-        let mask = self.slots.len() - 1;
-        let mut slot = (ends.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - self.bits)) as usize;
-        loop {
-            match self.slots[slot] {
-                u32::MAX => {
-                    let e = self.edges.len() as u32;
-                    self.slots[slot] = e;
-                    self.edges.push(Edge { ends, corners: [NO_PART; 2], ascending: false, count: 0 });
-                    return e;
-                }
-                e if self.edges[e as usize].ends == ends => return e,
-                _ => slot = (slot + 1) & mask,
-            }
-        }
-    }
-}
-
-/// The edge that corner `k` of a triangle with corners at `corners` walks: its ends as one key, and
-/// whether it walks it from the lower end.
-fn walked(corners: &[u32], k: usize) -> (u64, bool) {
-    let (a, b) = (corners[k], corners[(k + 1) % 3]);
-    ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), a < b)
-}
+/// Marks a corner in a bucket that is already paired.
+const PAIRED: u32 = u32::MAX;
 
 impl Edges {
-    /// Groups the corners of the triangles (three per triangle, `id` their positions) by the edge they
-    /// walk, leaving out triangles without area.
-    pub(crate) fn of(id: &[u32]) -> Self {
-        let mut table = EdgeTable::new(id.len());
-        let mut found =
-            Self { partner: vec![NO_PART; id.len()], border: Vec::new(), corners: Vec::new(), starts: Vec::new() };
+    /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
+    /// there are) by the edge they walk, leaving out triangles without area.
+    pub(crate) fn of(id: &[u32], positions: usize) -> Self {
         let with_area = id.chunks_exact(3).enumerate().filter(|&(t, _)| has_area(id, t));
-        for (t, corners) in with_area.clone() {
+        let mut start = vec![0u32; positions + 1];
+        for (_, corners) in with_area.clone() {
             for k in 0..3 {
-                let (ends, ascending) = walked(corners, k);
+                start[corners[k].min(corners[(k + 1) % 3]) as usize] += 1;
+            }
+        }
+        let mut total = 0;
+        for s in &mut start {
+            (*s, total) = (total, total + *s);
+        }
+        // Per bucket, in corner order: the edge's higher end, and the corner or'ed with `SAME_DIRECTION`
+        // when it walks the edge from the higher end.
+        let mut bucketed: Vec<(u32, u32)> = vec![(0, 0); total as usize];
+        for (t, corners) in with_area {
+            for k in 0..3 {
+                let (a, b) = (corners[k], corners[(k + 1) % 3]);
                 let c = (3 * t + k) as u32;
-                let e = table.number(ends) as usize;
-                let edge = &mut table.edges[e];
-                match edge.count {
-                    0 => (edge.corners[0], edge.ascending) = (c, ascending),
-                    1 => {
-                        let same = if ascending == edge.ascending { SAME_DIRECTION } else { 0 };
-                        let first = edge.corners[0];
-                        edge.corners[1] = c;
-                        (found.partner[first as usize], found.partner[c as usize]) = (c | same, first | same);
-                    }
-                    2 => edge.corners.iter().for_each(|&c| found.partner[c as usize] = NO_PART),
-                    _ => {}
-                }
-                edge.count += 1;
+                let (lo, entry) = if a < b { (a, (b, c)) } else { (b, (a, c | SAME_DIRECTION)) };
+                bucketed[start[lo as usize] as usize] = entry;
+                start[lo as usize] += 1;
             }
         }
-        found.border = table.edges.iter().filter(|e| e.count == 1).map(|e| e.corners[0]).collect();
-        if table.edges.iter().any(|e| e.count > 2) {
-            // (edge, corner) on the non-manifold edges, in corner order; sorted by edge (numbered in order
-            // of their first corner), the corners stay ascending.
-            let mut non_manifold: Vec<(u32, u32)> = Vec::new();
-            for (t, corners) in with_area {
-                for k in 0..3 {
-                    let e = table.number(walked(corners, k).0);
-                    if table.edges[e as usize].count > 2 {
-                        non_manifold.push((e, (3 * t + k) as u32));
-                    }
-                }
-            }
-            non_manifold.sort_by_key(|&(e, _)| e);
-            for (k, &(e, c)) in non_manifold.iter().enumerate() {
-                if k == 0 || non_manifold[k - 1].0 != e {
-                    found.starts.push(k as u32);
-                }
-                found.corners.push(c);
-            }
-            found.starts.push(found.corners.len() as u32);
+        // `start[p]` is now the end of bucket p, the start of bucket p + 1.
+        let mut found =
+            Self { partner: vec![NO_PART; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
+        let mut from = 0;
+        for &end in &start[..positions] {
+            found.pair(&mut bucketed[from as usize..end as usize]);
+            from = end;
         }
+        let corners = &found.corners;
+        found.groups.sort_unstable_by_key(|g| corners[g.start as usize]);
         found
+    }
+
+    /// Pairs the corners of one bucket (in corner order) that walk the same edge.
+    fn pair(&mut self, bucket: &mut [(u32, u32)]) {
+        let corner = |entry: u32| entry & !SAME_DIRECTION;
+        for i in 0..bucket.len() {
+            let (end, a) = bucket[i];
+            if end == PAIRED {
+                continue;
+            }
+            let mut others = bucket[i + 1..].iter().enumerate().filter(|e| e.1.0 == end).map(|e| i + 1 + e.0);
+            let Some(j) = others.next() else {
+                self.border.push(corner(a));
+                continue;
+            };
+            if others.next().is_none() {
+                let b = bucket[j].1;
+                let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
+                self.partner[corner(a) as usize] = corner(b) | same;
+                self.partner[corner(b) as usize] = corner(a) | same;
+                bucket[j].0 = PAIRED;
+                continue;
+            }
+            let from = self.corners.len() as u32;
+            self.corners.push(corner(a));
+            for other in &mut bucket[i + 1..] {
+                if other.0 == end {
+                    self.corners.push(corner(other.1));
+                    other.0 = PAIRED;
+                }
+            }
+            self.groups.push(from..self.corners.len() as u32);
+        }
     }
 
     /// The non-manifold edges' corners, edge by edge in order of their first corner.
     pub(crate) fn non_manifold(&self) -> impl Iterator<Item = &[u32]> + Clone {
-        self.starts.windows(2).map(|w| &self.corners[w[0] as usize..w[1] as usize])
+        self.groups.iter().map(|g| &self.corners[g.start as usize..g.end as usize])
     }
 }
 
@@ -161,14 +133,16 @@ mod tests {
         // Three triangles on the edge 0–1 (one walking it the other way), a fourth sharing 1–2 with the first,
         // and a degenerate one (positions 3, 3, 4) left out.
         let id = [0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 1, 5, 3, 3, 4];
-        let edges = Edges::of(&id);
+        let edges = Edges::of(&id, 6);
         assert_eq!(edges.non_manifold().collect::<Vec<_>>(), [&[0, 3, 6][..]]);
         assert_eq!((edges.partner[1], edges.partner[9]), (9, 1));
         // Two triangles walking an edge the same way (one of them reversed).
-        let same = Edges::of(&[0, 1, 2, 0, 1, 3]);
+        let same = Edges::of(&[0, 1, 2, 0, 1, 3], 4);
         assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PART, NO_PART, SAME_DIRECTION]);
         assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PART).count(), 2);
-        assert_eq!(edges.border, [2, 4, 5, 7, 8, 10, 11]);
+        let mut border = edges.border.clone();
+        border.sort_unstable();
+        assert_eq!(border, [2, 4, 5, 7, 8, 10, 11]);
         assert!(ascends(&id, 0) && !ascends(&id, 3) && !has_area(&id, 4));
     }
 }

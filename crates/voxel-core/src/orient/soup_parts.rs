@@ -30,7 +30,7 @@ impl SoupParts {
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
         let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
-        Self { parts: Arc::new(Parts::of_welded(&welded.id)), first: welded.first }
+        Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
     }
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
