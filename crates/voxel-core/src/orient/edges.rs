@@ -20,6 +20,20 @@ pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
     a != b && b != c && c != a
 }
 
+/// Calls `f` with every corner of the triangles with area (three per triangle, `id` their positions) and
+/// the ends of the edge it walks.
+fn for_each_edge(id: &[u32], mut f: impl FnMut(u32, u32, u32)) {
+    for (t, corners) in id.chunks_exact(3).enumerate() {
+        let [a, b, c] = [corners[0], corners[1], corners[2]];
+        if a != b && b != c && c != a {
+            let first = 3 * t as u32;
+            f(first, a, b);
+            f(first + 1, b, c);
+            f(first + 2, c, a);
+        }
+    }
+}
+
 /// Whether corner `c` walks its edge from the lower position number to the higher.
 pub(crate) fn ascends(id: &[u32], c: u32) -> bool {
     id[c as usize] < id[next(c) as usize]
@@ -49,13 +63,8 @@ impl Edges {
     /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
     /// there are) by the edge they walk, leaving out triangles without area.
     pub(crate) fn of(id: &[u32], positions: usize) -> Self {
-        let with_area = id.chunks_exact(3).enumerate().filter(|&(t, _)| has_area(id, t));
         let mut start = vec![0u32; positions + 1];
-        for (_, corners) in with_area.clone() {
-            for k in 0..3 {
-                start[corners[k].min(corners[(k + 1) % 3]) as usize] += 1;
-            }
-        }
+        for_each_edge(id, |_, a, b| start[a.min(b) as usize] += 1);
         let mut total = 0;
         for s in &mut start {
             (*s, total) = (total, total + *s);
@@ -63,15 +72,11 @@ impl Edges {
         // Per bucket, in corner order: the edge's higher end, and the corner or'ed with `SAME_DIRECTION`
         // when it walks the edge from the higher end.
         let mut bucketed: Vec<(u32, u32)> = vec![(0, 0); total as usize];
-        for (t, corners) in with_area {
-            for k in 0..3 {
-                let (a, b) = (corners[k], corners[(k + 1) % 3]);
-                let c = (3 * t + k) as u32;
-                let (lo, entry) = if a < b { (a, (b, c)) } else { (b, (a, c | SAME_DIRECTION)) };
-                bucketed[start[lo as usize] as usize] = entry;
-                start[lo as usize] += 1;
-            }
-        }
+        for_each_edge(id, |c, a, b| {
+            let (lo, entry) = if a < b { (a, (b, c)) } else { (b, (a, c | SAME_DIRECTION)) };
+            bucketed[start[lo as usize] as usize] = entry;
+            start[lo as usize] += 1;
+        });
         // `start[p]` is now the end of bucket p, the start of bucket p + 1.
         let mut found =
             Self { partner: vec![NO_PART; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
@@ -93,28 +98,33 @@ impl Edges {
             if end == PAIRED {
                 continue;
             }
-            let mut others = bucket[i + 1..].iter().enumerate().filter(|e| e.1.0 == end).map(|e| i + 1 + e.0);
-            let Some(j) = others.next() else {
-                self.border.push(corner(a));
-                continue;
-            };
-            if others.next().is_none() {
-                let b = bucket[j].1;
-                let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
-                self.partner[corner(a) as usize] = corner(b) | same;
-                self.partner[corner(b) as usize] = corner(a) | same;
-                bucket[j].0 = PAIRED;
-                continue;
-            }
-            let from = self.corners.len() as u32;
-            self.corners.push(corner(a));
-            for other in &mut bucket[i + 1..] {
+            let (mut others, mut last) = (0, i);
+            for (j, other) in bucket.iter().enumerate().skip(i + 1) {
                 if other.0 == end {
-                    self.corners.push(corner(other.1));
-                    other.0 = PAIRED;
+                    (others, last) = (others + 1, j);
                 }
             }
-            self.groups.push(from..self.corners.len() as u32);
+            match others {
+                0 => self.border.push(corner(a)),
+                1 => {
+                    let b = bucket[last].1;
+                    let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
+                    self.partner[corner(a) as usize] = corner(b) | same;
+                    self.partner[corner(b) as usize] = corner(a) | same;
+                    bucket[last].0 = PAIRED;
+                }
+                _ => {
+                    let from = self.corners.len() as u32;
+                    self.corners.push(corner(a));
+                    for other in &mut bucket[i + 1..] {
+                        if other.0 == end {
+                            self.corners.push(corner(other.1));
+                            other.0 = PAIRED;
+                        }
+                    }
+                    self.groups.push(from..self.corners.len() as u32);
+                }
+            }
         }
     }
 
