@@ -118,6 +118,7 @@ impl UnionFind {
         s
     }
 
+    /// Puts `a` and `b` in one set (rooted at the lower root: the joins' order does not matter).
     fn join(&mut self, a: u32, b: u32) {
         let (ra, rb) = (self.find(a), self.find(b));
         self.parent[ra.max(rb) as usize] = ra.min(rb);
@@ -125,7 +126,7 @@ impl UnionFind {
 }
 
 /// The model's closed parts.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub(crate) struct Parts {
     /// The closed part of each triangle, or [`NO_PART`] (a triangle of an open sheet, or without area).
     of: Vec<u32>,

@@ -10,7 +10,7 @@ use std::ops::Range;
 use super::NO_PART;
 
 /// The corner after `c` in its triangle.
-pub(crate) fn next(c: u32) -> u32 {
+fn next(c: u32) -> u32 {
     if c % 3 == 2 { c - 2 } else { c + 1 }
 }
 
@@ -25,7 +25,7 @@ pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
 fn for_each_edge(id: &[u32], mut f: impl FnMut(u32, u32, u32)) {
     for (t, corners) in id.chunks_exact(3).enumerate() {
         let [a, b, c] = [corners[0], corners[1], corners[2]];
-        if a != b && b != c && c != a {
+        if has_area(id, t) {
             let first = 3 * t as u32;
             f(first, a, b);
             f(first + 1, b, c);
