@@ -12,7 +12,7 @@
 use std::sync::Arc;
 
 use super::Parts;
-use super::weld::{grid_key, soup_key, weld, weld_sources};
+use super::weld::{all_different, grid_key, soup_key, weld, weld_sources};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
 
@@ -40,7 +40,7 @@ impl SoupParts {
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
     fn kept_apart_by(&self, tris: &[GridTriangle]) -> bool {
         let on_grid = self.first.iter().map(|&c| grid_key(tris[c as usize / 3][c as usize % 3]));
-        weld(self.first.len(), on_grid).first.len() == self.first.len()
+        all_different(self.first.len(), on_grid)
     }
 }
 

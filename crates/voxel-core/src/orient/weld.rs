@@ -40,11 +40,38 @@ impl Key for [u64; 3] {
     }
 }
 
+/// The number of slot bits of an open-addressing table for `count` keys (at most two-thirds full).
+fn table_bits(count: usize) -> u32 {
+    (count + count / 2).next_power_of_two().max(2).ilog2()
+}
+
+/// Whether the `count` keys `keys` are all different: an open-addressing table of the keys themselves,
+/// left at the first repeat.
+pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
+    let bits = table_bits(count);
+    let mut slots: Vec<Option<K>> = vec![None; 1 << bits];
+    let mask = slots.len() - 1;
+    for key in keys {
+        let mut slot = (key.hash() >> (64 - bits)) as usize;
+        loop {
+            match slots[slot] {
+                None => {
+                    slots[slot] = Some(key);
+                    break;
+                }
+                Some(other) if other == key => return false,
+                Some(_) => slot = (slot + 1) & mask,
+            }
+        }
+    }
+    true
+}
+
 /// Welds corners by their keys, given in corner order (`count` of them): one pass through an
 /// open-addressing table of position numbers, at most two-thirds full; equal keys are found exactly (the
 /// hash only picks where to look first), each position's key kept once, densely.
 pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
-    let bits = (count + count / 2).next_power_of_two().max(2).ilog2();
+    let bits = table_bits(count);
     let mut slots = vec![u32::MAX; 1 << bits];
     let mask = slots.len() - 1;
     let mut distinct: Vec<K> = Vec::new();
@@ -108,6 +135,10 @@ mod tests {
         let welded = weld(many.len(), many.iter().map(|&p| grid_key(p)));
         assert_eq!(welded.first.len(), 97 * 89);
         assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
+        // The same keys, once each, are all different; with one repeat, not.
+        let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
+        assert!(all_different(welded.first.len(), firsts.clone()));
+        assert!(!all_different(welded.first.len() + 1, firsts.clone().chain([grid_key(many[5_000])])));
     }
 
     #[test]
