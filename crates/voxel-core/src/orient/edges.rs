@@ -56,9 +56,6 @@ pub(crate) struct Edges {
     groups: Vec<Range<u32>>,
 }
 
-/// Marks a corner in a bucket that is already paired.
-const PAIRED: u32 = u32::MAX;
-
 impl Edges {
     /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
     /// there are) by the edge they walk, leaving out triangles without area.
@@ -90,38 +87,30 @@ impl Edges {
         found
     }
 
-    /// Pairs the corners of one bucket (in corner order) that walk the same edge.
+    /// Pairs the corners of one bucket (in corner order) that walk the same edge: a stable insertion sort by
+    /// the higher end (a bucket holds a handful of corners) makes each edge's corners a run, in corner order.
     fn pair(&mut self, bucket: &mut [(u32, u32)]) {
+        for i in 1..bucket.len() {
+            let entry = bucket[i];
+            let mut j = i;
+            while j > 0 && bucket[j - 1].0 > entry.0 {
+                bucket[j] = bucket[j - 1];
+                j -= 1;
+            }
+            bucket[j] = entry;
+        }
         let corner = |entry: u32| entry & !SAME_DIRECTION;
-        for i in 0..bucket.len() {
-            let (end, a) = bucket[i];
-            if end == PAIRED {
-                continue;
-            }
-            let (mut others, mut last) = (0, i);
-            for (j, other) in bucket.iter().enumerate().skip(i + 1) {
-                if other.0 == end {
-                    (others, last) = (others + 1, j);
-                }
-            }
-            match others {
-                0 => self.border.push(corner(a)),
-                1 => {
-                    let b = bucket[last].1;
+        for edge in bucket.chunk_by(|a, b| a.0 == b.0) {
+            match *edge {
+                [(_, a)] => self.border.push(corner(a)),
+                [(_, a), (_, b)] => {
                     let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
                     self.partner[corner(a) as usize] = corner(b) | same;
                     self.partner[corner(b) as usize] = corner(a) | same;
-                    bucket[last].0 = PAIRED;
                 }
                 _ => {
                     let from = self.corners.len() as u32;
-                    self.corners.push(corner(a));
-                    for other in &mut bucket[i + 1..] {
-                        if other.0 == end {
-                            self.corners.push(corner(other.1));
-                            other.0 = PAIRED;
-                        }
-                    }
+                    self.corners.extend(edge.iter().map(|&(_, c)| corner(c)));
                     self.groups.push(from..self.corners.len() as u32);
                 }
             }
