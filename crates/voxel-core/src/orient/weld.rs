@@ -115,8 +115,12 @@ pub(crate) fn weld_sources<K: Key>(sources: &[u32], key: impl Fn(usize) -> K) ->
         }
     }
     let by_source = weld(first_of_seen.len(), first_of_seen.iter().map(|&c| key(c as usize)));
+    // Each source's position, then each corner's through its source.
+    for number in seen.iter_mut().filter(|n| **n != u32::MAX) {
+        *number = by_source.id[*number as usize];
+    }
     Some(Welded {
-        id: sources.iter().map(|&s| by_source.id[seen[s as usize] as usize]).collect(),
+        id: sources.iter().map(|&s| seen[s as usize]).collect(),
         first: by_source.first.iter().map(|&k| first_of_seen[k as usize]).collect(),
     })
 }
