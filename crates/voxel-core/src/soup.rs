@@ -120,8 +120,9 @@ impl Vertex {
 /// World-space triangles grouped into parts, with their materials.
 ///
 /// The corners are read with [`TriangleSoup::vertices`] and changed only through
-/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`], so that what the soup keeps about its
-/// positions (the winding fill's closed parts, found once for every grid) never outlives them.
+/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`] (or the importer's indexed push), so that
+/// what the soup keeps about its positions (the winding fill's closed parts, found once for every grid, and
+/// the corners' source vertices) never outlives them.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
     /// Materials referenced by parts.
