@@ -42,7 +42,7 @@ const COLD_MODELS: [(&str, Option<u32>); 4] = [
 /// voxelizer has not seen (its part analysis is not cached).
 fn scaled(soup: &TriangleSoup, k: i32) -> TriangleSoup {
     let mut scaled = soup.clone();
-    for v in &mut scaled.vertices {
+    for v in scaled.vertices_mut() {
         v.position = v.position.map(|c| c * 2f32.powi(k));
     }
     scaled

@@ -70,12 +70,11 @@ fn donut() -> TriangleSoup {
     // Dough below, pink icing on top as vertex colours, and sprinkles.
     let mut soup = TriangleSoup::default();
     let body = torus(1.4, 0.65, 28);
-    let part = soup.add_mesh(&body, [1.0; 4], "donut");
+    soup.add_mesh(&body, [1.0; 4], "donut");
     let (dough, icing) = (rgb(0xd9a066), rgb(0xf48fb1));
-    for (k, v) in soup.vertices.iter_mut().enumerate() {
-        if soup.triangle_parts[k / 3] == part {
-            v.color = if v.position[1] > 0.12 { icing } else { dough };
-        }
+    // The donut is the soup's only part so far.
+    for v in soup.vertices_mut() {
+        v.color = if v.position[1] > 0.12 { icing } else { dough };
     }
     let sprinkle_colors = [0xffffff, 0x4fc3f7, 0xffee58, 0x81c784, 0xba68c8];
     for k in 0..14 {

@@ -217,12 +217,9 @@ pub(crate) fn solid_fill(
         Method::Reference => None,
     };
     let roles = match fill {
-        FillMode::Winding => winding_roles(
-            tris,
-            columns.as_ref(),
-            || crossings_by_rasterizing(spec, tris),
-            || closed_parts(soup, spec, tris),
-        ),
+        FillMode::Winding => {
+            winding_roles(tris, columns.as_ref(), || crossings_by_rasterizing(spec, tris), || closed_parts(soup, tris))
+        }
         _ => vec![Role::Parity; tris.len()],
     };
     match columns {

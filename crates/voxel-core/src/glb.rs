@@ -120,8 +120,9 @@ mod tests {
         let mut soup = TriangleSoup::default();
         soup.add_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0, 0.0, 0.0, 1.0], "box");
         let sphere = soup.add_mesh(&uv_sphere(0.5, 6), [0.0, 1.0, 0.0, 1.0], "ball");
-        for (t, v) in soup.vertices.iter_mut().enumerate() {
-            if soup.triangle_parts[t / 3] == sphere {
+        let triangle_parts = soup.triangle_parts.clone();
+        for (t, v) in soup.vertices_mut().iter_mut().enumerate() {
+            if triangle_parts[t / 3] == sphere {
                 v.color = [0.5, 0.5, 1.0, 1.0];
             }
         }
@@ -129,7 +130,7 @@ mod tests {
         assert_eq!(back.triangle_count(), soup.triangle_count());
         assert_eq!(back.materials.len(), 2);
         assert_eq!(back.materials[0].base_color, [1.0, 0.0, 0.0, 1.0]);
-        assert_eq!(back.vertices, soup.vertices);
+        assert_eq!(back.vertices(), soup.vertices());
     }
 
     #[test]

@@ -215,7 +215,7 @@ impl GridSpec {
 
     /// Every triangle of `soup` in grid coordinates.
     pub fn grid_triangles(&self, soup: &TriangleSoup) -> Vec<GridTriangle> {
-        soup.vertices
+        soup.vertices()
             .chunks_exact(3)
             .map(|t| [self.to_grid(t[0].position), self.to_grid(t[1].position), self.to_grid(t[2].position)])
             .collect()

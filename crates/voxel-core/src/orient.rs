@@ -12,10 +12,12 @@
 //!
 //! # Parts
 //!
-//! Corners are welded by their exact grid-space position (the positions the column test sees). A *sheet*
-//! is a set of triangles connected through manifold edges (edges used by exactly two triangles); the walk
-//! over those edges orients it consistently (each triangle keeps or reverses its corner order; the sheet
-//! takes the orientation most of its triangles have in the file) unless a cycle contradicts itself. A
+//! Corners are welded by their exact position (the soup's own, once per soup: see `soup_parts`; a grid's
+//! where its snapping welds two of the soup's positions), numbering the positions. A *sheet* is a set of
+//! triangles connected through manifold edges (edges used by exactly two triangles, found by bucketing the
+//! corners by their edge's ends: see `edges`); a walk over those edges orients it consistently (each
+//! triangle keeps or reverses its corner order; the sheet takes the orientation most of its triangles have
+//! in the file) unless a cycle contradicts itself. A
 //! sheet is *open* when it cannot be oriented or has a border edge (used once); a non-manifold edge (used
 //! three or more times) must be walked equally often in both directions by the sheets meeting there,
 //! otherwise they are all open (repeated until every edge balances). The sheets left form closed surfaces;
@@ -43,7 +45,9 @@
 //! non-manifold ones and non-orientable ones count by parity (see the column count in
 //! [`crate::fill`]), so a model made only of such parts fills exactly as whole-model parity did.
 
-mod cache;
+mod edges;
+mod soup_parts;
+mod weld;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -54,8 +58,9 @@ use robust::{Coord, orient2d};
 
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
+use edges::{Edges, SAME_DIRECTION, ascends, has_area};
 
-pub(crate) use cache::closed_parts;
+pub(crate) use soup_parts::{SoupParts, closed_parts};
 
 /// How a triangle's column crossings count.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,93 +94,34 @@ impl Role {
     }
 }
 
-/// Marks a triangle that belongs to no part (two corners at the same position: no surface).
+/// Marks a triangle that belongs to no part (two corners at the same position: no surface), and a corner
+/// without a partner.
 const NO_PART: u32 = u32::MAX;
 
-/// A corner's exact grid-space position as bits (−0 and +0 alike).
-fn position_key(v: DVec3) -> [u64; 3] {
-    [v.x, v.y, v.z].map(|c| (c + 0.0).to_bits())
-}
-
-/// A 64-bit mix (splitmix64's finalizer).
-fn mix(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
-}
-
-/// A hash of a position.
-fn position_hash(key: [u64; 3]) -> u64 {
-    key.iter().fold(0x9e37_79b9_7f4a_7c15, |h, &w| mix(h ^ w))
-}
-
-/// Edge `corner % 3` of triangle `corner / 3` runs from its corner k to corner k + 1.
-fn edge_ends(tris: &[GridTriangle], corner: u32) -> ([u64; 3], [u64; 3]) {
-    let t = &tris[corner as usize / 3];
-    let k = corner as usize % 3;
-    (position_key(t[k]), position_key(t[(k + 1) % 3]))
-}
-
-/// The edge of `corner` without its direction (ends in ascending order), and whether the corner's
-/// triangle walks it from the smaller end to the larger.
-fn undirected(tris: &[GridTriangle], corner: u32) -> ([[u64; 3]; 2], bool) {
-    let (a, b) = edge_ends(tris, corner);
-    if a < b { ([a, b], true) } else { ([b, a], false) }
-}
-
-/// Union–find over triangles that also tracks, for each triangle, whether its corner order must be
-/// reversed relative to its set's root for the set to be consistently oriented.
-struct OrientingUnionFind {
+/// Union–find over sheets (the non-manifold edges join them into parts).
+struct UnionFind {
     parent: Vec<u32>,
-    /// Reversed relative to the parent.
-    reversed: Vec<bool>,
-    size: Vec<u32>,
-    /// Per root: a cycle of constraints contradicted itself (the set cannot be oriented).
-    contradiction: Vec<bool>,
 }
 
-impl OrientingUnionFind {
+impl UnionFind {
     fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n as u32).collect(),
-            reversed: vec![false; n],
-            size: vec![1; n],
-            contradiction: vec![false; n],
-        }
+        Self { parent: (0..n as u32).collect() }
     }
 
-    /// The root of `t` and whether `t` is reversed relative to it (halving the path: each node on it is
-    /// pointed to its grandparent, in one pass).
-    fn find(&mut self, t: u32) -> (u32, bool) {
-        let (mut node, mut reversed) = (t, false);
-        loop {
-            let parent = self.parent[node as usize];
-            if parent == node {
-                return (node, reversed);
-            }
-            // A root is never reversed, so pointing a root's child at the root changes nothing.
-            let grandparent = self.parent[parent as usize];
-            self.reversed[node as usize] ^= self.reversed[parent as usize];
-            self.parent[node as usize] = grandparent;
-            reversed ^= self.reversed[node as usize];
-            node = grandparent;
+    /// The root of `s` (halving the path: each node on it is pointed to its grandparent).
+    fn find(&mut self, mut s: u32) -> u32 {
+        while self.parent[s as usize] != s {
+            let grandparent = self.parent[self.parent[s as usize] as usize];
+            self.parent[s as usize] = grandparent;
+            s = grandparent;
         }
+        s
     }
 
-    /// Records that `a` and `b` share a manifold edge; `differ`: one of them must be reversed relative to
-    /// the other (they walk the edge in the same direction).
-    fn join(&mut self, a: u32, b: u32, differ: bool) {
-        let (ra, pa) = self.find(a);
-        let (rb, pb) = self.find(b);
-        if ra == rb {
-            self.contradiction[ra as usize] |= pa ^ pb != differ;
-            return;
-        }
-        let (big, small) = if self.size[ra as usize] >= self.size[rb as usize] { (ra, rb) } else { (rb, ra) };
-        self.parent[small as usize] = big;
-        self.reversed[small as usize] = pa ^ pb ^ differ;
-        self.size[big as usize] += self.size[small as usize];
-        self.contradiction[big as usize] |= self.contradiction[small as usize];
+    /// Puts `a` and `b` in one set (rooted at the lower root: the joins' order does not matter).
+    fn join(&mut self, a: u32, b: u32) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        self.parent[ra.max(rb) as usize] = ra.min(rb);
     }
 }
 
@@ -192,84 +138,41 @@ pub(crate) struct Parts {
 }
 
 impl Parts {
-    /// Finds the closed parts of `tris`.
+    /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
-        // Every edge of every triangle, keyed by a hash of its two ends (the sum of their hashes: the same
-        // whichever way it is walked); the edges of triangles without three distinct corners get the key
-        // `u64::MAX` and are left out below.
-        let mut edges = vec![(0u64, 0u32); 3 * tris.len()];
-        edges.par_chunks_mut(3).zip(tris.par_iter()).enumerate().for_each(|(t, (out, tri))| {
-            let keys = tri.map(position_key);
-            let hashes = keys.map(position_hash);
-            let area = has_area(keys);
-            for k in 0..3 {
-                let hash = if area { mix(hashes[k].wrapping_add(hashes[(k + 1) % 3])) } else { u64::MAX };
-                out[k] = (hash, (3 * t + k) as u32);
-            }
-        });
-        // Only the hash orders: corners with equal hashes are grouped by position below whatever their order.
-        let edges = grouped_by_hash(&edges);
-        // A run of two corners with the same hash is all but always a manifold edge: note the partners
-        // now and check them exactly below. Other runs are split into exact groups here (rare).
-        let mut partner = vec![NO_PART; 3 * tris.len()];
-        let mut union = OrientingUnionFind::new(tris.len());
-        // Border and non-manifold edges, as groups of corners walking the same edge.
-        let mut unpaired: Vec<Vec<u32>> = Vec::new();
-        for run in edges.chunk_by(|a, b| a.0 == b.0) {
-            let run_has_area = |&&(_, c): &&(u64, u32)| has_area(tris[c as usize / 3].map(position_key));
-            if let [(hash, a), (_, b)] = *run
-                && hash != u64::MAX
-            {
-                (partner[a as usize], partner[b as usize]) = (b, a);
-                continue;
-            }
-            for group in same_edge_groups(tris, run.iter().filter(run_has_area).map(|e| e.1).collect()) {
-                match group[..] {
-                    [a, b] => join_across(tris, &mut union, a, b),
-                    _ => unpaired.push(group),
-                }
-            }
+        let welded = weld::weld(3 * tris.len(), tris.iter().flatten().map(|&v| weld::grid_key(v)));
+        Self::of_welded(&welded.id, welded.first.len())
+    }
+
+    /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
+    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle
+    /// order: ties and non-manifold edges are decided in triangle and corner order.
+    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
+        let edges = Edges::of(id, positions);
+        let mut sheets = Sheets::of(id, &edges.partner);
+        for &c in &edges.border {
+            let s = sheets.of[c as usize / 3] as usize;
+            sheets.open[s] = true;
         }
-        // In triangle order: partners are usually near each other in memory, the hash order is random.
-        for (a, &b) in partner.iter().enumerate() {
-            let a = a as u32;
-            if b == NO_PART || b < a {
-                continue;
-            }
-            match same_edge(tris, a, b) {
-                Some(same_direction) => union.join(a / 3, b / 3, same_direction),
-                None => unpaired.extend([vec![a], vec![b]]),
-            }
-        }
-        // In corner order, so that which sheets stay closed does not depend on the hash (nor on whether the
-        // positions are the grid's or the soup's: see `cache`).
-        unpaired.sort_unstable_by_key(|group| group[0]);
-        let sheets = Sheets::of(tris, union);
-        Self::close(tris, sheets, &unpaired)
+        Self::close(id, sheets, &edges)
     }
 
     /// Drops the sheets that cannot be part of a closed surface, then joins the rest into parts across
     /// non-manifold edges.
-    fn close(tris: &[GridTriangle], sheets: Sheets, unpaired: &[Vec<u32>]) -> Self {
+    fn close(id: &[u32], sheets: Sheets, edges: &Edges) -> Self {
         let Sheets { of: sheet_of, reversed, mut open } = sheets;
         let sheet = |corner: u32| sheet_of[corner as usize / 3] as usize;
-        for group in unpaired.iter().filter(|g| g.len() == 1) {
-            open[sheet(group[0])] = true;
-        }
+        // Each corner's step along its (non-manifold) edge, its sheet oriented: +1 ascending, −1 descending.
+        let step = |c: u32| if ascends(id, c) ^ reversed[c as usize / 3] { 1 } else { -1 };
         // A non-manifold edge must be walked equally often both ways by the sheets kept; where it is not,
         // the sheets meeting there are dropped too (which may unbalance another edge: repeat).
-        let non_manifold: Vec<&Vec<u32>> = unpaired.iter().filter(|g| g.len() > 2).collect();
         let mut changed = true;
         while changed {
             changed = false;
-            for group in &non_manifold {
-                let balance: i32 = group
-                    .iter()
-                    .filter(|&&c| !open[sheet(c)])
-                    .map(|&c| if undirected(tris, c).1 ^ reversed[c as usize / 3] { 1 } else { -1 })
-                    .sum();
+            for group in edges.non_manifold() {
+                let balance: i32 = group.iter().filter(|&&c| !open[sheet(c)]).map(|&c| step(c)).sum();
                 if balance != 0 {
-                    for &c in group.iter() {
+                    for &c in group {
                         changed |= !open[sheet(c)];
                         open[sheet(c)] = true;
                     }
@@ -278,31 +181,30 @@ impl Parts {
         }
         // Parts: the kept sheets, joined where they close each other — across a non-manifold edge that
         // they walk unequally often each way on their own (two boxes sharing an edge stay two parts).
-        let mut union = OrientingUnionFind::new(open.len());
-        for group in &non_manifold {
-            let mut balance: Vec<(usize, i32)> = Vec::new();
+        let mut union = UnionFind::new(open.len());
+        let mut balance: Vec<(usize, i32)> = Vec::new();
+        for group in edges.non_manifold() {
+            balance.clear();
             for &c in group.iter().filter(|&&c| !open[sheet(c)]) {
-                let step = if undirected(tris, c).1 ^ reversed[c as usize / 3] { 1 } else { -1 };
                 match balance.iter_mut().find(|(s, _)| *s == sheet(c)) {
-                    Some((_, sum)) => *sum += step,
-                    None => balance.push((sheet(c), step)),
+                    Some((_, sum)) => *sum += step(c),
+                    None => balance.push((sheet(c), step(c))),
                 }
             }
             let mut unbalanced = balance.iter().filter(|b| b.1 != 0).map(|b| b.0 as u32);
             if let Some(first) = unbalanced.next() {
                 for other in unbalanced {
-                    union.join(first, other, false);
+                    union.join(first, other);
                 }
             }
         }
         let mut part_of_root = vec![NO_PART; open.len()];
-        let mut parts = Self { of: vec![NO_PART; tris.len()], reversed, count: 0 };
+        let mut parts = Self { of: vec![NO_PART; sheet_of.len()], reversed, count: 0 };
         for (t, &s) in sheet_of.iter().enumerate() {
-            let s = s as usize;
-            if s == NO_PART as usize || open[s] {
+            if s == NO_PART || open[s as usize] {
                 continue;
             }
-            let root = union.find(s as u32).0 as usize;
+            let root = union.find(s) as usize;
             if part_of_root[root] == NO_PART {
                 part_of_root[root] = parts.count as u32;
                 parts.count += 1;
@@ -311,63 +213,6 @@ impl Parts {
         }
         parts
     }
-}
-
-/// `edges` with equal hashes (the first field) next to each other. The hashes are uniform, so a counting
-/// sort by their top bits leaves buckets of one or two edges on average, and only a bucket of three or
-/// more needs sorting to bring its equal hashes together: two passes over the edges instead of a
-/// comparison sort.
-fn grouped_by_hash(edges: &[(u64, u32)]) -> Vec<(u64, u32)> {
-    let bits = edges.len().max(2).ilog2().min(24);
-    let bucket = |hash: u64| (hash >> (64 - bits)) as usize;
-    let mut start = vec![0u32; (1 << bits) + 1];
-    for e in edges {
-        start[bucket(e.0) + 1] += 1;
-    }
-    for b in 1..start.len() {
-        start[b] += start[b - 1];
-    }
-    let mut next = start.clone();
-    let mut sorted = vec![(0, 0); edges.len()];
-    for &e in edges {
-        let slot = &mut next[bucket(e.0)];
-        sorted[*slot as usize] = e;
-        *slot += 1;
-    }
-    for b in start.windows(2) {
-        if b[1] - b[0] > 2 {
-            sorted[b[0] as usize..b[1] as usize].sort_unstable_by_key(|e| e.0);
-        }
-    }
-    sorted
-}
-
-/// Whether corners `a` and `b` walk the same edge (`Some`), and if so whether in the same direction. The
-/// coordinates are finite, so comparing them is comparing their position keys.
-fn same_edge(tris: &[GridTriangle], a: u32, b: u32) -> Option<bool> {
-    let ends = |corner: u32| {
-        let t = &tris[corner as usize / 3];
-        let k = corner as usize % 3;
-        (t[k], t[(k + 1) % 3])
-    };
-    let ((a0, a1), (b0, b1)) = (ends(a), ends(b));
-    if a0 == b1 && a1 == b0 {
-        Some(false)
-    } else if a0 == b0 && a1 == b1 {
-        Some(true)
-    } else {
-        None
-    }
-}
-
-/// Joins the triangles of corners `a` and `b`, which walk the same manifold edge.
-fn join_across(tris: &[GridTriangle], union: &mut OrientingUnionFind, a: u32, b: u32) {
-    union.join(a / 3, b / 3, undirected(tris, a).1 == undirected(tris, b).1);
-}
-
-/// Whether a triangle's corners (as position keys) are three different points.
-fn has_area(keys: [[u64; 3]; 3]) -> bool {
-    keys[0] != keys[1] && keys[1] != keys[2] && keys[2] != keys[0]
 }
 
 /// Sheets: triangles connected through manifold edges, each oriented consistently where it can be.
@@ -381,53 +226,51 @@ struct Sheets {
 }
 
 impl Sheets {
-    /// Numbers the sets of `union` in order of their first triangle and orients each as most of its
-    /// triangles are in the file (on a tie, as its first triangle is: never as the union's root happens to
-    /// be, which depends on the order of the joins).
-    fn of(tris: &[GridTriangle], mut union: OrientingUnionFind) -> Self {
-        let n = tris.len();
-        let mut sheet_of_root = vec![NO_PART; n];
+    /// Walks the triangles (corners at positions `id`) across their manifold edges ([`Edges::partner`]), numbering
+    /// the sheets in order of their first triangle, and orients each as most of its triangles are in the
+    /// file (on a tie, as its first triangle is). Two triangles walking their shared edge the same way
+    /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
+    fn of(id: &[u32], partner: &[u32]) -> Self {
+        let n = id.len() / 3;
         let mut sheets = Self { of: vec![NO_PART; n], reversed: vec![false; n], open: Vec::new() };
-        // Per sheet: triangles, how many are reversed relative to the root, and whether the first is.
-        let mut size: Vec<usize> = Vec::new();
-        let mut against_root: Vec<usize> = Vec::new();
-        let mut first_against_root: Vec<bool> = Vec::new();
-        for (t, tri) in tris.iter().enumerate() {
-            if !has_area(tri.map(position_key)) {
+        let mut flip: Vec<bool> = Vec::new();
+        let mut stack: Vec<u32> = Vec::new();
+        for first in 0..n {
+            if sheets.of[first] != NO_PART || !has_area(id, first) {
                 continue;
             }
-            let (root, reversed) = union.find(t as u32);
-            if sheet_of_root[root as usize] == NO_PART {
-                sheet_of_root[root as usize] = sheets.open.len() as u32;
-                sheets.open.push(union.contradiction[root as usize]);
-                size.push(0);
-                against_root.push(0);
-                first_against_root.push(reversed);
+            let s = sheets.open.len() as u32;
+            let (mut size, mut against_first, mut contradiction) = (1usize, 0usize, false);
+            sheets.of[first] = s;
+            stack.push(first as u32);
+            while let Some(t) = stack.pop() {
+                for &p in &partner[3 * t as usize..3 * t as usize + 3] {
+                    if p == NO_PART {
+                        continue;
+                    }
+                    let u = (p & !SAME_DIRECTION) as usize / 3;
+                    let reversed = sheets.reversed[t as usize] ^ (p & SAME_DIRECTION != 0);
+                    if sheets.of[u] == NO_PART {
+                        sheets.of[u] = s;
+                        sheets.reversed[u] = reversed;
+                        size += 1;
+                        against_first += usize::from(reversed);
+                        stack.push(u as u32);
+                    } else {
+                        contradiction |= sheets.reversed[u] != reversed;
+                    }
+                }
             }
-            let s = sheet_of_root[root as usize];
-            sheets.of[t] = s;
-            sheets.reversed[t] = reversed;
-            size[s as usize] += 1;
-            against_root[s as usize] += usize::from(reversed);
+            sheets.open.push(contradiction);
+            flip.push(2 * against_first > size);
         }
-        let flip: Vec<bool> = (0..size.len())
-            .map(|s| 2 * against_root[s] > size[s] || (2 * against_root[s] == size[s] && first_against_root[s]))
-            .collect();
-        for t in 0..n {
-            let s = sheets.of[t] as usize;
-            if s != NO_PART as usize && flip[s] {
-                sheets.reversed[t] = !sheets.reversed[t];
+        for (reversed, &s) in sheets.reversed.iter_mut().zip(&sheets.of) {
+            if s != NO_PART && flip[s as usize] {
+                *reversed = !*reversed;
             }
         }
         sheets
     }
-}
-
-/// Splits corners whose edges have the same hash into groups walking the same edge (almost always one
-/// group: a hash collision of different edges is all but impossible, but is handled exactly).
-fn same_edge_groups(tris: &[GridTriangle], mut corners: Vec<u32>) -> Vec<Vec<u32>> {
-    corners.sort_by_key(|&c| (undirected(tris, c).0, c));
-    corners.chunk_by(|&a, &b| undirected(tris, a).0 == undirected(tris, b).0).map(<[u32]>::to_vec).collect()
 }
 
 /// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
@@ -566,25 +409,6 @@ mod tests {
 
     fn block() -> IndexedMesh {
         cuboid([0.25; 3], [3.75; 3])
-    }
-
-    #[test]
-    fn grouping_by_hash_brings_equal_hashes_together() {
-        // 3000 edges over 700 hashes, spread over the buckets and crowded into one (the top bits alike).
-        let hashes = (0..3000u64).map(|i| match i % 7 {
-            0 => u64::MAX - (i % 5),
-            _ => mix(i % 700),
-        });
-        let edges: Vec<(u64, u32)> = hashes.zip(0..).collect();
-        let grouped = grouped_by_hash(&edges);
-        let mut seen = std::collections::HashSet::new();
-        for run in grouped.chunk_by(|a, b| a.0 == b.0) {
-            assert!(seen.insert(run[0].0), "hash {:x} in two runs", run[0].0);
-        }
-        let (mut a, mut b) = (edges.clone(), grouped);
-        a.sort_unstable();
-        b.sort_unstable();
-        assert_eq!(a, b, "the same edges");
     }
 
     #[test]

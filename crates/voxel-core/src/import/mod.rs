@@ -66,6 +66,7 @@ fn import_with<T>(
         buffers: &buffers,
         parts_of_mesh: HashMap::new(),
         instances: Vec::new(),
+        source_vertices: 0,
     };
     let instances = scene_instances(&document)?;
     builder.materials.prefetch(instances.iter().filter_map(|(node, _)| node.mesh()), &buffers);
@@ -149,6 +150,8 @@ struct SoupBuilder<'a> {
     parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
     /// Where each part came from.
     instances: Vec<PartSource>,
+    /// The source vertices numbered so far (each primitive instance's vertices get the next numbers).
+    source_vertices: u32,
 }
 
 /// One primitive's triangles in mesh space with their attributes.
@@ -180,7 +183,7 @@ impl SoupBuilder<'_> {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
         for (decoded, prim) in prims.iter().enumerate() {
-            let first_vertex = self.soup.vertices.len();
+            let first_vertex = self.soup.vertices().len();
             self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world: Vec<[f32; 3]> = prim
@@ -190,6 +193,9 @@ impl SoupBuilder<'_> {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
                 })
                 .collect();
+            let first_source = self.source_vertices;
+            let numbered = u32::try_from(world.len()).ok().and_then(|n| first_source.checked_add(n));
+            self.source_vertices = numbered.unwrap_or(u32::MAX);
             for tri in &prim.triangles {
                 let corners = tri.map(|i| {
                     let i = i as usize;
@@ -199,7 +205,10 @@ impl SoupBuilder<'_> {
                         color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
                     }
                 });
-                self.soup.push_triangle(part, corners);
+                match numbered {
+                    Some(_) => self.soup.push_indexed_triangle(part, corners, tri.map(|i| first_source + i)),
+                    None => self.soup.push_triangle(part, corners),
+                }
             }
         }
         Ok(())

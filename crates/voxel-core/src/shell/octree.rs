@@ -118,7 +118,7 @@ mod tests {
         let first_copy = soup.triangle_count();
         // The ball twice: every triangle of it has an equally near twin with a higher index.
         for _ in 0..2 {
-            for t in ball.vertices.chunks_exact(3) {
+            for t in ball.vertices().chunks_exact(3) {
                 soup.push_triangle(0, [t[0], t[1], t[2]]);
             }
         }

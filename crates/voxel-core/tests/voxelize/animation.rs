@@ -70,7 +70,7 @@ impl Buffers {
 
 /// The posed position of every corner, in soup order.
 fn positions(soup: &TriangleSoup) -> Vec<[f32; 3]> {
-    soup.vertices.iter().map(|v| v.position).collect()
+    soup.vertices().iter().map(|v| v.position).collect()
 }
 
 fn pose(model: &mut AnimatedModel, clip: usize, t: f32) -> TriangleSoup {
@@ -156,8 +156,8 @@ fn a_one_joint_skin_turned_90_degrees_moves_its_vertices_as_computed_by_hand() {
     // Colours, parts and materials are the static import's.
     assert_eq!(posed.triangle_parts, rest.triangle_parts);
     assert_eq!(
-        posed.vertices.iter().map(|v| v.color).collect::<Vec<_>>(),
-        rest.vertices.iter().map(|v| v.color).collect::<Vec<_>>()
+        posed.vertices().iter().map(|v| v.color).collect::<Vec<_>>(),
+        rest.vertices().iter().map(|v| v.color).collect::<Vec<_>>()
     );
 }
 
@@ -321,14 +321,14 @@ fn a_model_without_animations_has_no_clips_and_cannot_be_posed() {
     let bytes = b.glb(json!({"scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}]}));
     let mut model = load_animated_slice(&bytes, None).unwrap();
     assert!(model.clips().is_empty());
-    assert_eq!(model.rest_soup().vertices, load_slice(&bytes, None).unwrap().vertices);
+    assert_eq!(model.rest_soup().vertices(), load_slice(&bytes, None).unwrap().vertices());
     assert!(model.pose_into(0, 0.0, &mut TriangleSoup::default()).is_err());
-    assert_eq!(model.into_rest_soup().vertices, load_slice(&bytes, None).unwrap().vertices);
+    assert_eq!(model.into_rest_soup().vertices(), load_slice(&bytes, None).unwrap().vertices());
 }
 
 /// Mean displacement between two poses of the corners whose bind position satisfies `select`.
 fn mean_motion(bind: &TriangleSoup, a: &TriangleSoup, b: &TriangleSoup, select: impl Fn([f32; 3]) -> bool) -> f32 {
-    let moved: Vec<f32> = (bind.vertices.iter().zip(&a.vertices).zip(&b.vertices))
+    let moved: Vec<f32> = (bind.vertices().iter().zip(a.vertices()).zip(b.vertices()))
         .filter(|((r, _), _)| select(r.position))
         .map(|((_, p), q)| (glam::Vec3::from(p.position) - glam::Vec3::from(q.position)).length())
         .collect();
@@ -338,9 +338,9 @@ fn mean_motion(bind: &TriangleSoup, a: &TriangleSoup, b: &TriangleSoup, select: 
 
 /// The largest distance between the same corner in two poses.
 fn max_motion(a: &TriangleSoup, b: &TriangleSoup) -> f32 {
-    a.vertices
+    a.vertices()
         .iter()
-        .zip(&b.vertices)
+        .zip(b.vertices())
         .map(|(p, q)| glam::Vec3::from(p.position).distance(q.position.into()))
         .fold(0.0, f32::max)
 }
@@ -418,16 +418,16 @@ fn the_milk_trucks_wheels_turn_rigidly_and_its_body_stays() {
         bind.parts.iter().enumerate().filter(|(_, p)| p.name.starts_with(name)).map(|(i, _)| i as u32).collect()
     };
     let corners_of = |part: u32| -> Vec<usize> {
-        (0..bind.vertices.len()).filter(|&v| bind.triangle_parts[v / 3] == part).collect()
+        (0..bind.vertices().len()).filter(|&v| bind.triangle_parts[v / 3] == part).collect()
     };
     for part in parts_named("Cesium_Milk_Truck") {
-        assert!(corners_of(part).iter().all(|&v| bind.vertices[v].position == posed.vertices[v].position));
+        assert!(corners_of(part).iter().all(|&v| bind.vertices()[v].position == posed.vertices()[v].position));
     }
     let wheels = parts_named("Wheels");
     assert_eq!(wheels.len(), 2);
     for part in wheels {
         let corners = corners_of(part);
-        let at = |soup: &TriangleSoup, v: usize| glam::Vec3::from(soup.vertices[v].position);
+        let at = |soup: &TriangleSoup, v: usize| glam::Vec3::from(soup.vertices()[v].position);
         assert!(corners.iter().any(|&v| at(&bind, v).distance(at(&posed, v)) > 0.3), "wheel {part} did not turn");
         // Rigid: every corner keeps its distance to the part's first corner.
         let first = corners[0];
@@ -551,7 +551,7 @@ fn glb_frames_import_back_with_each_frames_cells() {
     let written = file_names(&gltf);
     assert_eq!(written, ["box-0000.bin", "box-0000.gltf", "box-0001.bin", "box-0001.gltf"]);
     let first = voxel_core::load_file(&gltf.join("box-0000.gltf")).unwrap();
-    assert_eq!(first.vertices, voxel_core::load_file(&out.join("box-0000.glb")).unwrap().vertices);
+    assert_eq!(first.vertices(), voxel_core::load_file(&out.join("box-0000.glb")).unwrap().vertices());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

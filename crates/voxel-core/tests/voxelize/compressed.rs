@@ -25,7 +25,7 @@ fn twins(plain: &str, packed: &str) -> Option<(TriangleSoup, TriangleSoup)> {
     let (a, mut b) = (load(plain)?, load(packed)?);
     if (plain, packed) == TRUCK_DRACO {
         // Undo the quarter turn exactly (a swap and a negation).
-        for v in &mut b.vertices {
+        for v in b.vertices_mut() {
             let [x, y, z] = v.position;
             v.position = [z, y, -x];
         }

@@ -1,0 +1,147 @@
+//! The edges of welded triangles: which corners walk the same edge.
+//!
+//! Corner `c` is the start of edge `c % 3` of triangle `c / 3`, which runs to the triangle's next corner.
+//! The corners are bucketed by their edge's lower end (one counting pass and one scatter: the position
+//! numbers are small integers), and in each bucket, a handful of corners, those with the same higher end
+//! walk the same edge.
+
+use std::ops::Range;
+
+use super::NO_PART;
+
+/// The corner after `c` in its triangle.
+fn next(c: u32) -> u32 {
+    if c % 3 == 2 { c - 2 } else { c + 1 }
+}
+
+/// Whether triangle `t`'s corners are at three different positions (`id`: each corner's position).
+pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
+    let [a, b, c] = [id[3 * t], id[3 * t + 1], id[3 * t + 2]];
+    a != b && b != c && c != a
+}
+
+/// Calls `f` with every corner of the triangles with area (three per triangle, `id` their positions) and
+/// the ends of the edge it walks.
+fn for_each_edge(id: &[u32], mut f: impl FnMut(u32, u32, u32)) {
+    for (t, corners) in id.chunks_exact(3).enumerate() {
+        let [a, b, c] = [corners[0], corners[1], corners[2]];
+        if has_area(id, t) {
+            let first = 3 * t as u32;
+            f(first, a, b);
+            f(first + 1, b, c);
+            f(first + 2, c, a);
+        }
+    }
+}
+
+/// Whether corner `c` walks its edge from the lower position number to the higher.
+pub(crate) fn ascends(id: &[u32], c: u32) -> bool {
+    id[c as usize] < id[next(c) as usize]
+}
+
+/// Marks a partner that walks the shared edge in the same direction (the corner numbers are below 2³¹:
+/// three per triangle of a soup in memory).
+pub(crate) const SAME_DIRECTION: u32 = 1 << 31;
+
+/// The edges of the triangles with area, by how many corners walk each.
+pub(crate) struct Edges {
+    /// Each corner's partner on a manifold edge (walked by exactly two corners), or'ed with
+    /// [`SAME_DIRECTION`] when both walk it the same way; else [`NO_PART`].
+    pub partner: Vec<u32>,
+    /// Corners alone on their edge (a border).
+    pub border: Vec<u32>,
+    /// The corners of the non-manifold edges (walked three or more times), ascending within an edge.
+    corners: Vec<u32>,
+    /// Each non-manifold edge's corners in `corners`, in order of their first corner.
+    groups: Vec<Range<u32>>,
+}
+
+impl Edges {
+    /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
+    /// there are) by the edge they walk, leaving out triangles without area.
+    pub(crate) fn of(id: &[u32], positions: usize) -> Self {
+        let mut start = vec![0u32; positions + 1];
+        for_each_edge(id, |_, a, b| start[a.min(b) as usize] += 1);
+        let mut total = 0;
+        for s in &mut start {
+            (*s, total) = (total, total + *s);
+        }
+        // Per bucket, in corner order: the edge's higher end, and the corner or'ed with `SAME_DIRECTION`
+        // when it walks the edge from the higher end.
+        let mut bucketed: Vec<(u32, u32)> = vec![(0, 0); total as usize];
+        for_each_edge(id, |c, a, b| {
+            let (lo, entry) = if a < b { (a, (b, c)) } else { (b, (a, c | SAME_DIRECTION)) };
+            bucketed[start[lo as usize] as usize] = entry;
+            start[lo as usize] += 1;
+        });
+        // `start[p]` is now the end of bucket p, the start of bucket p + 1.
+        let mut found =
+            Self { partner: vec![NO_PART; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
+        let mut from = 0;
+        for &end in &start[..positions] {
+            found.pair(&mut bucketed[from as usize..end as usize]);
+            from = end;
+        }
+        let corners = &found.corners;
+        found.groups.sort_unstable_by_key(|g| corners[g.start as usize]);
+        found
+    }
+
+    /// Pairs the corners of one bucket (in corner order) that walk the same edge: a stable insertion sort by
+    /// the higher end (a bucket holds a handful of corners) makes each edge's corners a run, in corner order.
+    fn pair(&mut self, bucket: &mut [(u32, u32)]) {
+        for i in 1..bucket.len() {
+            let entry = bucket[i];
+            let mut j = i;
+            while j > 0 && bucket[j - 1].0 > entry.0 {
+                bucket[j] = bucket[j - 1];
+                j -= 1;
+            }
+            bucket[j] = entry;
+        }
+        let corner = |entry: u32| entry & !SAME_DIRECTION;
+        for edge in bucket.chunk_by(|a, b| a.0 == b.0) {
+            match *edge {
+                [(_, a)] => self.border.push(corner(a)),
+                [(_, a), (_, b)] => {
+                    let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
+                    self.partner[corner(a) as usize] = corner(b) | same;
+                    self.partner[corner(b) as usize] = corner(a) | same;
+                }
+                _ => {
+                    let from = self.corners.len() as u32;
+                    self.corners.extend(edge.iter().map(|&(_, c)| corner(c)));
+                    self.groups.push(from..self.corners.len() as u32);
+                }
+            }
+        }
+    }
+
+    /// The non-manifold edges' corners, edge by edge in order of their first corner.
+    pub(crate) fn non_manifold(&self) -> impl Iterator<Item = &[u32]> + Clone {
+        self.groups.iter().map(|g| &self.corners[g.start as usize..g.end as usize])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corners_are_grouped_by_the_edge_they_walk() {
+        // Three triangles on the edge 0–1 (one walking it the other way), a fourth sharing 1–2 with the first,
+        // and a degenerate one (positions 3, 3, 4) left out.
+        let id = [0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 1, 5, 3, 3, 4];
+        let edges = Edges::of(&id, 6);
+        assert_eq!(edges.non_manifold().collect::<Vec<_>>(), [&[0, 3, 6][..]]);
+        assert_eq!((edges.partner[1], edges.partner[9]), (9, 1));
+        // Two triangles walking an edge the same way (one of them reversed).
+        let same = Edges::of(&[0, 1, 2, 0, 1, 3], 4);
+        assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PART, NO_PART, SAME_DIRECTION]);
+        assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PART).count(), 2);
+        let mut border = edges.border.clone();
+        border.sort_unstable();
+        assert_eq!(border, [2, 4, 5, 7, 8, 10, 11]);
+        assert!(ascends(&id, 0) && !ascends(&id, 3) && !has_area(&id, 4));
+    }
+}

@@ -1,0 +1,178 @@
+//! The closed parts of a soup, found once and kept by the soup.
+//!
+//! The app voxelizes the same soup again at every grid size the user picks, and the part analysis (welding,
+//! sheets, closed parts: see [`super`]) depends only on which corners share a position. So the soup keeps
+//! the analysis of its own positions ([`TriangleSoup::closed_parts`], found when a winding fill first needs
+//! it, dropped whenever its positions can change: a clone shares it, a new pose starts without one), and
+//! every grid on which no two of the soup's different positions land on the same grid point uses it (checked
+//! at every grid: its snapping can weld two corners less than a snapping step apart, and then that grid's
+//! own positions are analysed). The soup's positions are welded as the grid's are, so on such a grid the
+//! parts are exactly the ones the grid's positions give.
+
+use std::sync::Arc;
+
+use super::Parts;
+use super::weld::{all_different, grid_key, soup_key, weld, weld_sources};
+use crate::geom::GridTriangle;
+use crate::soup::TriangleSoup;
+
+/// The closed parts of a soup's own positions.
+#[derive(Clone, Debug)]
+pub(crate) struct SoupParts {
+    /// The first corner at each of the soup's distinct positions.
+    first: Vec<u32>,
+    /// The parts its positions give.
+    parts: Arc<Parts>,
+}
+
+impl SoupParts {
+    /// Analyses `soup`'s positions.
+    pub(crate) fn of(soup: &TriangleSoup) -> Self {
+        let corners = soup.vertices();
+        let key = |c: usize| soup_key(corners[c].position);
+        let welded = soup
+            .sources()
+            .and_then(|sources| weld_sources(sources, key))
+            .unwrap_or_else(|| weld(corners.len(), (0..corners.len()).map(key)));
+        Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
+    }
+
+    /// Whether the soup's grid triangles `tris` keep its different positions apart.
+    fn kept_apart_by(&self, tris: &[GridTriangle]) -> bool {
+        let on_grid = self.first.iter().map(|&c| grid_key(tris[c as usize / 3][c as usize % 3]));
+        all_different(self.first.len(), on_grid)
+    }
+}
+
+/// The closed parts of `tris`, the triangles of `soup` on a grid: the soup's own when the grid keeps its
+/// different positions apart, else found with the grid's positions.
+pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &[GridTriangle]) -> Arc<Parts> {
+    let own = soup.closed_parts();
+    if own.kept_apart_by(tris) { Arc::clone(&own.parts) } else { Arc::new(Parts::find(tris)) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{GridSize, GridSpec};
+    use crate::shapes::{IndexedMesh, cuboid};
+    use crate::voxelize::{VoxelizeOptions, voxelize};
+
+    /// A box [0, 1]³ and a box from x = 1 + `gap` to 2, each without its face towards the other.
+    fn boxes(gap: f32) -> TriangleSoup {
+        let without_face = |lo: [f32; 3], hi: [f32; 3], x: f32| {
+            let mut mesh = cuboid(lo, hi);
+            let positions = mesh.positions.clone();
+            mesh.triangles.retain(|t| !t.iter().all(|&i| positions[i as usize][0] == x));
+            mesh
+        };
+        let mut mesh = without_face([0.0; 3], [1.0; 3], 1.0);
+        append(&mut mesh, &without_face([1.0 + gap, 0.0, 0.0], [2.0, 1.0, 1.0], 1.0 + gap));
+        TriangleSoup::from_mesh(&mesh, [1.0; 4])
+    }
+
+    fn append(mesh: &mut IndexedMesh, other: &IndexedMesh) {
+        let offset = mesh.positions.len() as u32;
+        mesh.positions.extend(&other.positions);
+        mesh.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
+    }
+
+    fn grid_tris(soup: &TriangleSoup, r: u32) -> Vec<GridTriangle> {
+        GridSpec::fit(soup, 9.0, GridSize::Resolution(r), 1.0, 1 << 24).unwrap().grid_triangles(soup)
+    }
+
+    fn cells(soup: &TriangleSoup, r: u32) -> Vec<[u16; 3]> {
+        let options = VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() };
+        voxelize(soup, &options).unwrap().voxels().map(|v| v.cell).collect()
+    }
+
+    #[test]
+    fn one_analysis_serves_every_grid_that_keeps_the_corners_apart() {
+        // Touching: one closed box; a quarter apart: two open ones.
+        for (gap, count) in [(0.0, 1), (0.25, 0)] {
+            let soup = boxes(gap);
+            let first = closed_parts(&soup, &grid_tris(&soup, 4));
+            assert_eq!(first.count, count);
+            for r in [4, 16, 64] {
+                let tris = grid_tris(&soup, r);
+                let parts = closed_parts(&soup, &tris);
+                assert!(Arc::ptr_eq(&parts, &first), "gap {gap}, R={r}: analysed again");
+                assert_eq!(*parts, Parts::find(&tris), "gap {gap}, R={r}");
+            }
+        }
+    }
+
+    #[test]
+    fn source_vertices_give_the_analysis_of_the_corners() {
+        // The touching boxes, each corner pushed with its mesh vertex: welded by source, the same parts.
+        let soup = boxes(0.0);
+        let mut indexed = TriangleSoup::default();
+        let material = indexed.add_material(Default::default());
+        let part = indexed.add_part(material, "indexed");
+        let mut sources = std::collections::HashMap::new();
+        for t in soup.vertices().chunks_exact(3) {
+            let numbers = [0, 1, 2].map(|k| {
+                let next = sources.len() as u32;
+                *sources.entry(t[k].position.map(f32::to_bits)).or_insert(next)
+            });
+            indexed.push_indexed_triangle(part, [t[0], t[1], t[2]], numbers);
+        }
+        assert!(indexed.sources().is_some());
+        assert_eq!(indexed.closed_parts().first, soup.closed_parts().first);
+        assert_eq!(*indexed.closed_parts().parts, *soup.closed_parts().parts);
+        assert_eq!(soup.closed_parts().parts.count, 1);
+    }
+
+    #[test]
+    fn a_clone_shares_the_analysis_until_its_positions_change() {
+        let soup = boxes(0.25);
+        let tris = grid_tris(&soup, 16);
+        let open = closed_parts(&soup, &tris);
+        let mut moved = soup.clone();
+        assert!(Arc::ptr_eq(&closed_parts(&moved, &tris), &open));
+        // The right box moved against the left one: a closed box, in the clone only.
+        for v in moved.vertices_mut().iter_mut().filter(|v| v.position[0] == 1.25) {
+            v.position[0] = 1.0;
+        }
+        let tris = grid_tris(&moved, 16);
+        assert_eq!(closed_parts(&moved, &tris).count, 1);
+        assert_eq!(*closed_parts(&moved, &tris), Parts::find(&tris));
+        assert!(Arc::ptr_eq(&closed_parts(&soup, &grid_tris(&soup, 16)), &open));
+    }
+
+    #[test]
+    fn a_changed_soup_fills_as_a_fresh_one() {
+        // A box with a bottom triangle reversed (so the parts are analysed) around a cavity facing inwards.
+        let mut mesh = cuboid([0.0; 3], [3.0; 3]);
+        mesh.triangles[8].swap(1, 2);
+        let mut cavity = cuboid([1.0; 3], [2.0; 3]);
+        cavity.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        append(&mut mesh, &cavity);
+        let mut soup = TriangleSoup::from_mesh(&mesh, [1.0; 4]);
+        let hollow = cells(&soup, 12);
+        assert_eq!(hollow, cells(&soup, 12), "the analysis reused");
+        // One corner of the cavity moved off its neighbours': the cavity's wall is cracked (open), so it
+        // counts by parity and no longer subtracts.
+        let corner = 3 * 12;
+        soup.vertices_mut()[corner].position[0] += 0.001;
+        let mut fresh = TriangleSoup::default();
+        let material = fresh.add_material(Default::default());
+        let part = fresh.add_part(material, "fresh");
+        for t in soup.vertices().chunks_exact(3) {
+            fresh.push_triangle(part, [t[0], t[1], t[2]]);
+        }
+        let filled = cells(&soup, 12);
+        assert_eq!(filled, cells(&fresh, 12));
+        assert_eq!((hollow.len() + 4 * 4 * 4, filled.len()), (12 * 12 * 12, 12 * 12 * 12));
+    }
+
+    #[test]
+    fn corners_the_grid_welds_are_analysed_with_the_grids_positions() {
+        // 2⁻²⁰ apart: two open boxes in the soup, one closed box on a coarse grid, whose snapping welds them.
+        let soup = boxes(1.0 / (1 << 20) as f32);
+        let tris = grid_tris(&soup, 4);
+        let parts = closed_parts(&soup, &tris);
+        assert_eq!(*parts, Parts::find(&tris));
+        assert_eq!((parts.count, soup.closed_parts().parts.count), (1, 0));
+    }
+}

@@ -1,0 +1,161 @@
+//! Welding: which corners share a position, as a small integer per corner.
+
+use glam::DVec3;
+
+/// Corners welded by their exact position.
+pub(crate) struct Welded {
+    /// The position of each corner, numbered in order of first appearance.
+    pub id: Vec<u32>,
+    /// The first corner at each position.
+    pub first: Vec<u32>,
+}
+
+/// A grid-space position's key (−0 and +0 alike).
+pub(crate) fn grid_key(v: DVec3) -> [u64; 3] {
+    [v.x, v.y, v.z].map(|c| (c + 0.0).to_bits())
+}
+
+/// A soup position's key (−0 and +0 alike).
+pub(crate) fn soup_key(p: [f32; 3]) -> [u32; 3] {
+    p.map(|c| (c + 0.0).to_bits())
+}
+
+/// A position key whose bits a multiplicative hash spreads over its top bits.
+pub(crate) trait Key: Copy + Eq {
+    /// The key's hash: its top bits pick the slot.
+    fn hash(&self) -> u64;
+}
+
+impl Key for [u32; 3] {
+    fn hash(&self) -> u64 {
+        let xy = u64::from(self[0]) | (u64::from(self[1]) << 32);
+        (xy.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ u64::from(self[2])).wrapping_mul(0xbf58_476d_1ce4_e5b9)
+    }
+}
+
+impl Key for [u64; 3] {
+    fn hash(&self) -> u64 {
+        let xy = self[0] ^ self[1].rotate_left(32);
+        (xy.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ self[2]).wrapping_mul(0xbf58_476d_1ce4_e5b9)
+    }
+}
+
+/// The number of slot bits of an open-addressing table for `count` keys (at most two-thirds full).
+fn table_bits(count: usize) -> u32 {
+    (count + count / 2).next_power_of_two().max(2).ilog2()
+}
+
+/// Whether the `count` keys `keys` are all different: an open-addressing table of the keys themselves,
+/// left at the first repeat.
+pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
+    let bits = table_bits(count);
+    let mut slots: Vec<Option<K>> = vec![None; 1 << bits];
+    let mask = slots.len() - 1;
+    for key in keys {
+        let mut slot = (key.hash() >> (64 - bits)) as usize;
+        loop {
+            match slots[slot] {
+                None => {
+                    slots[slot] = Some(key);
+                    break;
+                }
+                Some(other) if other == key => return false,
+                Some(_) => slot = (slot + 1) & mask,
+            }
+        }
+    }
+    true
+}
+
+/// Welds corners by their keys, given in corner order (`count` of them): one pass through an
+/// open-addressing table of position numbers, at most two-thirds full; equal keys are found exactly (the
+/// hash only picks where to look first), each position's key kept once, densely.
+pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
+    let bits = table_bits(count);
+    let mut slots = vec![u32::MAX; 1 << bits];
+    let mask = slots.len() - 1;
+    let mut distinct: Vec<K> = Vec::new();
+    let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::new() };
+    for (c, key) in keys.enumerate() {
+        let mut slot = (key.hash() >> (64 - bits)) as usize;
+        let id = loop {
+            match slots[slot] {
+                u32::MAX => {
+                    let id = distinct.len() as u32;
+                    slots[slot] = id;
+                    distinct.push(key);
+                    welded.first.push(c as u32);
+                    break id;
+                }
+                id if distinct[id as usize] == key => break id,
+                _ => slot = (slot + 1) & mask,
+            }
+        };
+        welded.id.push(id);
+    }
+    welded
+}
+
+/// Welds corners made from source vertices (`sources`, one per corner; corners with one source share its
+/// position), `key` giving a corner's key: only each source's first corner is looked up, and the positions are
+/// numbered as [`weld`] numbers them. `None` when the source numbers reach beyond twice the corner count (so
+/// sparse that a table indexed by them would cost more than welding the corners).
+pub(crate) fn weld_sources<K: Key>(sources: &[u32], key: impl Fn(usize) -> K) -> Option<Welded> {
+    let end = sources.iter().max().map_or(0, |&s| s as usize + 1);
+    if end > 2 * sources.len() {
+        return None;
+    }
+    // Each source's number in order of first appearance, and its first corner.
+    let mut seen = vec![u32::MAX; end];
+    let mut first_of_seen: Vec<u32> = Vec::new();
+    for (c, &s) in sources.iter().enumerate() {
+        if seen[s as usize] == u32::MAX {
+            seen[s as usize] = first_of_seen.len() as u32;
+            first_of_seen.push(c as u32);
+        }
+    }
+    let by_source = weld(first_of_seen.len(), first_of_seen.iter().map(|&c| key(c as usize)));
+    // Each source's position, then each corner's through its source.
+    for number in seen.iter_mut().filter(|n| **n != u32::MAX) {
+        *number = by_source.id[*number as usize];
+    }
+    Some(Welded {
+        id: sources.iter().map(|&s| seen[s as usize]).collect(),
+        first: by_source.first.iter().map(|&k| first_of_seen[k as usize]).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
+        let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
+        let welded = weld(corners.len(), corners.iter().map(|&p| soup_key(p)));
+        assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
+        // Many keys, few distinct: the table's probing finds every repeat.
+        let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
+        let welded = weld(many.len(), many.iter().map(|&p| grid_key(p)));
+        assert_eq!(welded.first.len(), 97 * 89);
+        assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
+        // The same keys, once each, are all different; with one repeat, not.
+        let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
+        assert!(all_different(welded.first.len(), firsts.clone()));
+        assert!(!all_different(welded.first.len() + 1, firsts.clone().chain([grid_key(many[5_000])])));
+    }
+
+    #[test]
+    fn welding_by_source_numbers_the_positions_as_welding_the_corners() {
+        // Sources 0 and 3 at one position, 1 and 2 at others; corners in an order that meets them out of turn.
+        let at = [[0.0, 0.0, 1.0], [2.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 1.0]];
+        let sources = [2, 3, 2, 1, 0, 3, 1];
+        let key = |c: usize| soup_key(at[sources[c] as usize]);
+        let by_source = weld_sources(&sources, key).unwrap();
+        let by_corner = weld(sources.len(), (0..sources.len()).map(key));
+        assert_eq!((&by_source.id, &by_source.first), (&by_corner.id, &by_corner.first));
+        assert_eq!((by_source.id, by_source.first), (vec![0, 1, 0, 2, 1, 1, 2], vec![0, 1, 3]));
+        // Numbers beyond twice the corner count: left to corner welding.
+        assert!(weld_sources(&[0, 7, 1], |c| soup_key(at[c])).is_none());
+    }
+}
