@@ -60,6 +60,29 @@ pub fn depth_at(t: &GridTriangle, p: [f64; 2]) -> f64 {
     z.clamp(a.z.min(b.z).min(c.z), a.z.max(b.z).max(c.z))
 }
 
+/// The normal of the separating axis test's plane: (t1 − t0) × (t2 − t1).
+#[inline]
+pub(crate) fn triangle_normal(t: &GridTriangle) -> DVec3 {
+    (t[1] - t[0]).cross(t[2] - t[1])
+}
+
+/// Calls `f(k, axis, lo, hi)` for each non-zero direction edge × box axis k of the separating axis test (its
+/// k component is zero), with the range [lo, hi] of the triangle's corners projected on it.
+#[inline]
+pub(crate) fn for_each_edge_axis(t: &GridTriangle, mut f: impl FnMut(usize, DVec3, f64, f64)) {
+    for e in [t[1] - t[0], t[2] - t[1], t[0] - t[2]] {
+        // The cross products of the edge with the x, y and z axes.
+        for (k, axis) in
+            [DVec3::new(0.0, -e.z, e.y), DVec3::new(e.z, 0.0, -e.x), DVec3::new(-e.y, e.x, 0.0)].into_iter().enumerate()
+        {
+            if axis != DVec3::ZERO {
+                let p = t.map(|v| axis.dot(v));
+                f(k, axis, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+            }
+        }
+    }
+}
+
 /// A triangle prepared for many box-overlap tests against cells (separating axis test of Akenine-Möller).
 ///
 /// Everything that depends only on the triangle is computed once: its extent along the box axes, its plane,
@@ -82,20 +105,13 @@ pub struct BoxTester {
 impl BoxTester {
     /// Prepares triangle `t`.
     pub fn new(t: &GridTriangle) -> Self {
-        let edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
-        let normal = edges[0].cross(edges[1]);
+        let normal = triangle_normal(t);
         let mut axes = [(DVec3::ZERO, 0.0, 0.0); 9];
         let mut axis_count = 0;
-        for e in edges {
-            // The cross products of the edge with the x, y and z axes.
-            for axis in [DVec3::new(0.0, -e.z, e.y), DVec3::new(e.z, 0.0, -e.x), DVec3::new(-e.y, e.x, 0.0)] {
-                if axis != DVec3::ZERO {
-                    let p = t.map(|v| axis.dot(v));
-                    axes[axis_count] = (axis, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-                    axis_count += 1;
-                }
-            }
-        }
+        for_each_edge_axis(t, |_, axis, lo, hi| {
+            axes[axis_count] = (axis, lo, hi);
+            axis_count += 1;
+        });
         Self {
             lo: t[0].min(t[1]).min(t[2]),
             hi: t[0].max(t[1]).max(t[2]),

@@ -4,11 +4,13 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::geom::{BoxTester, GridTriangle};
+use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSpec};
 use crate::radix;
 
+mod cells;
 mod octree;
+use cells::CellTester;
 pub(crate) use octree::ShellOctree;
 
 /// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
@@ -51,18 +53,11 @@ fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
     (cell as u64) << 32 | (tri as u64) << 1 | u64::from(thin)
 }
 
-/// Whether the cell at `c + step` exists and is filled.
-fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bool {
-    spec.step(c, step).is_some_and(|n| fill.get(spec.index(n[0], n[1], n[2])))
-}
-
 /// How much of the triangle–box test a candidate cell needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Test {
     /// No test: the cell's footprint lies outside the triangle's projection.
     Outside,
-    /// None: the cell holds the whole triangle.
-    Known,
     /// The box axes and the plane: the cell's footprint lies inside the triangle's projection.
     Plane,
     /// The whole separating axis test.
@@ -131,29 +126,17 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     // number when the round trip through i64 keeps it; beyond i64's range, `to − 1` is `to` anyway.)
     let whole = |to: f64| to == (to as i64) as f64;
     let last_cell_of = |a: usize, from: f64, to: f64| cell_of(a, if to > from && whole(to) { to - 1.0 } else { to });
-    // Only triangles with candidate cells near their edges need the full test.
-    let tester = std::cell::OnceCell::new();
-    let tester = || tester.get_or_init(|| BoxTester::new(t));
-    let mut emit = |c: [u32; 3], test: Test| {
-        let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-        let half = DVec3::splat(0.5);
-        let overlaps = match test {
-            Test::Outside => false,
-            Test::Known => true,
-            Test::Plane => tester().overlaps_plane(center, half),
-            Test::Full => tester().overlaps(center, half),
-        };
-        if !overlaps {
-            return;
-        }
-        let index = spec.index(c[0], c[1], c[2]);
-        let thin = !fill.get(index) && !filled_at(spec, fill, c, step) && !filled_at(spec, fill, c, back);
+    let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
+    let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
+    let mut push = |c: [u32; 3]| {
+        let index = c[0] as usize * strides[0] + c[1] as usize * strides[1] + c[2] as usize;
+        let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
         out.push(pack(index, tri, thin));
     };
     let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
     if lo_cell == [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])) {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
-        emit(lo_cell, Test::Known);
+        push(lo_cell);
         return;
     }
     let an = n.abs();
@@ -166,34 +149,66 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let inside = FootprintTest::new(t, n[d].signum(), u, v);
+    let tester = CellTester::new(t, d);
+    let (t0, n, lo, hi) = (t[0].to_array(), n.to_array(), lo.to_array(), hi.to_array());
     for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
+        // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
+        let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
+        let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
         for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
             let test = inside.place(iu, iv);
             if test == Test::Outside {
                 continue;
             }
             // Extent of the plane along the dominant axis over this cell's footprint.
-            let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
             let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
             let mut dlo = f64::INFINITY;
             let mut dhi = f64::NEG_INFINITY;
-            for cu in us {
+            for u_term in u_terms {
                 for cv in vs {
                     // n · (p − t0) = 0 solved for the dominant coordinate.
-                    let pd = t[0][d] - (n[u] * (cu - t[0][u]) + n[v] * (cv - t[0][v])) / n[d];
+                    let pd = t0[d] - (u_term + n[v] * (cv - t0[v])) / n[d];
                     dlo = dlo.min(pd);
                     dhi = dhi.max(pd);
                 }
             }
             let (dlo, dhi) = (dlo.max(lo[d]), dhi.min(hi[d]));
-            for id in cell_of(d, dlo)..=last_cell_of(d, dlo, dhi) {
-                let mut c = [0u32; 3];
-                c[u] = iu;
-                c[v] = iv;
-                c[d] = id;
-                emit(c, test);
+            let ids = cell_of(d, dlo)..=last_cell_of(d, dlo, dhi);
+            if ids.is_empty() {
+                continue;
+            }
+            let center = [f64::from(iu) + 0.5, f64::from(iv) + 0.5];
+            let Some(column) = tester.column(center, test == Test::Full) else { continue };
+            for id in ids {
+                if column.overlaps(f64::from(id) + 0.5) {
+                    let mut c = [0u32; 3];
+                    (c[u], c[v], c[d]) = (iu, iv, id);
+                    push(c);
+                }
             }
         }
+    }
+}
+
+/// The cell one step along a fixed direction from the cells of a triangle.
+struct Neighbour {
+    step: [i32; 3],
+    /// The difference of the linear indices.
+    delta: isize,
+}
+
+impl Neighbour {
+    fn new(spec: &GridSpec, step: [i32; 3]) -> Self {
+        let [_, ny, nz] = spec.dims.map(|n| n as isize);
+        Self { step, delta: (step[0] as isize * ny + step[1] as isize) * nz + step[2] as isize }
+    }
+
+    /// Whether the neighbour of cell `c` (at linear index `index`) exists and is filled.
+    #[inline]
+    fn filled(&self, spec: &GridSpec, fill: &BitGrid, c: [u32; 3], index: usize) -> bool {
+        // Below zero, the cell wraps to a huge number: outside the grid too.
+        (0..3).all(|a| ((c[a] as i32 + self.step[a]) as u32) < spec.dims[a])
+            && fill.get(index.wrapping_add_signed(self.delta))
     }
 }
 
@@ -234,6 +249,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::BoxTester;
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
