@@ -67,17 +67,25 @@ pub(crate) fn triangle_normal(t: &GridTriangle) -> DVec3 {
 }
 
 /// Calls `f(k, axis, lo, hi)` for each non-zero direction edge × box axis k of the separating axis test (its
-/// k component is zero), with the range [lo, hi] of the triangle's corners projected on it.
+/// k component is zero), with the range [lo, hi] of the triangle's corners projected on it. The projections
+/// are the sums of the two products of the non-zero components: the third product is an exact zero, so this
+/// is `DVec3::dot`'s value.
 #[inline]
-pub(crate) fn for_each_edge_axis(t: &GridTriangle, mut f: impl FnMut(usize, DVec3, f64, f64)) {
+pub(crate) fn for_each_edge_axis(t: &GridTriangle, mut f: impl FnMut(usize, [f64; 3], f64, f64)) {
+    let corners = t.map(|w| w.to_array());
     for e in [t[1] - t[0], t[2] - t[1], t[0] - t[2]] {
-        // The cross products of the edge with the x, y and z axes.
-        for (k, axis) in
-            [DVec3::new(0.0, -e.z, e.y), DVec3::new(e.z, 0.0, -e.x), DVec3::new(-e.y, e.x, 0.0)].into_iter().enumerate()
-        {
-            if axis != DVec3::ZERO {
-                let p = t.map(|v| axis.dot(v));
-                f(k, axis, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        let e = e.to_array();
+        for k in 0..3 {
+            // e × (the unit vector along k) is −e[j] along i and e[i] along j.
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let (ai, aj) = (-e[j], e[i]);
+            if ai != 0.0 || aj != 0.0 {
+                let [p0, p1, p2] = corners.map(|w| ai * w[i] + aj * w[j]);
+                let mut axis = [0.0; 3];
+                (axis[i], axis[j]) = (ai, aj);
+                // Finite values: plain comparisons pick the same extremes as `f64::min` and `f64::max`.
+                let (lo, hi) = if p0 < p1 { (p0, p1) } else { (p1, p0) };
+                f(k, axis, if p2 < lo { p2 } else { lo }, if p2 > hi { p2 } else { hi });
             }
         }
     }
@@ -109,7 +117,7 @@ impl BoxTester {
         let mut axes = [(DVec3::ZERO, 0.0, 0.0); 9];
         let mut axis_count = 0;
         for_each_edge_axis(t, |_, axis, lo, hi| {
-            axes[axis_count] = (axis, lo, hi);
+            axes[axis_count] = (DVec3::from_array(axis), lo, hi);
             axis_count += 1;
         });
         Self {

@@ -76,7 +76,7 @@ struct FootprintTest {
 
 impl FootprintTest {
     /// Prepares triangle `t` projected on axes `u` and `v`; `orientation` is the sign of its projected area.
-    fn new(t: &GridTriangle, orientation: f64, u: usize, v: usize) -> Self {
+    fn new(t: &[[f64; 3]; 3], orientation: f64, u: usize, v: usize) -> Self {
         let edges = [0, 1, 2].map(|k| {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             let dir = [(b[u] - a[u]) * orientation, (b[v] - a[v]) * orientation];
@@ -117,8 +117,9 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     }
     let step = normal_step(n);
     let back = step.map(|s| -s);
-    let lo = t[0].min(t[1]).min(t[2]);
-    let hi = t[0].max(t[1]).max(t[2]);
+    let corners = t.map(|w| w.to_array());
+    let lo = t[0].min(t[1]).min(t[2]).to_array();
+    let hi = t[0].max(t[1]).max(t[2]).to_array();
     let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
     // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
     let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
@@ -148,9 +149,10 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         2
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
-    let inside = FootprintTest::new(t, n[d].signum(), u, v);
-    let tester = CellTester::new(t, d);
-    let (t0, n, lo, hi) = (t[0].to_array(), n.to_array(), lo.to_array(), hi.to_array());
+    let n = n.to_array();
+    let inside = FootprintTest::new(&corners, n[d].signum(), u, v);
+    let tester = CellTester::new(t, d, lo, hi);
+    let t0 = corners[0];
     for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
         // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
         let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
@@ -271,7 +273,8 @@ mod tests {
                 2
             };
             let (u, v) = ((d + 1) % 3, (d + 2) % 3);
-            let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&t, n[d].signum(), u, v));
+            let corners = t.map(|w| w.to_array());
+            let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&corners, n[d].signum(), u, v));
             for (iu, iv, id) in (0..12).flat_map(|a| (0..12).flat_map(move |b| (0..12).map(move |c| (a, b, c)))) {
                 let mut c = DVec3::ZERO;
                 (c[u], c[v], c[d]) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5, f64::from(id) + 0.5);

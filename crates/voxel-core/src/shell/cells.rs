@@ -67,19 +67,19 @@ pub(super) struct CellTester {
 }
 
 impl CellTester {
-    /// Prepares triangle `t` for columns along axis `d`.
-    pub fn new(t: &GridTriangle, d: usize) -> Self {
+    /// Prepares triangle `t`, which spans `lo` to `hi`, for columns along axis `d`.
+    pub fn new(t: &GridTriangle, d: usize, lo: [f64; 3], hi: [f64; 3]) -> Self {
         let (u, v) = ((d + 1) % 3, (d + 2) % 3);
         let normal = triangle_normal(t);
-        let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+        let n = normal.to_array();
         let mut tester = Self {
             d,
             lo_along: lo[d],
             hi_along: hi[d],
             lo_across: [lo[u], lo[v]],
             hi_across: [hi[u], hi[v]],
-            normal_across: [normal[u], normal[v]],
-            normal_along: normal[d],
+            normal_across: [n[u], n[v]],
+            normal_along: n[d],
             plane: normal.dot(t[0]),
             plane_reach: DVec3::splat(HALF).dot(normal.abs()),
             column_axes: [EdgeAxis::default(); 3],
@@ -88,7 +88,8 @@ impl CellTester {
             cell_axis_count: 0,
         };
         for_each_edge_axis(t, |k, dir, lo, hi| {
-            let reach = DVec3::splat(HALF).dot(dir.abs());
+            // The sum of two halves, as `DVec3::dot` computes it with the zero component's exact zero.
+            let reach = HALF * dir[(k + 1) % 3].abs() + HALF * dir[(k + 2) % 3].abs();
             let axis = EdgeAxis { across: [dir[u], dir[v]], along: dir[d], lo, hi, reach };
             if k == d {
                 tester.column_axes[tester.column_axis_count] = axis;
@@ -188,7 +189,7 @@ mod tests {
         for t in triangles(600) {
             let plain = BoxTester::new(&t);
             for d in 0..3 {
-                let tester = CellTester::new(&t, d);
+                let tester = CellTester::new(&t, d, t[0].min(t[1]).min(t[2]).into(), t[0].max(t[1]).max(t[2]).into());
                 let (u, v) = ((d + 1) % 3, (d + 2) % 3);
                 for (iu, iv) in (0..9).flat_map(|a| (0..9).map(move |b| (a, b))) {
                     for edges in [false, true] {
