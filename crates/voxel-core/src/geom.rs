@@ -34,14 +34,20 @@ pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
     if outside(t[0].x, t[1].x, t[2].x, p[0]) || outside(t[0].y, t[1].y, t[2].y, p[1]) {
         return false;
     }
-    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
-    if orient2d(xy(t[0]), xy(t[1]), xy(t[2])) == 0.0 {
+    if !has_projected_area(t) {
         return false;
     }
     let s0 = edge_side(t[0], t[1], p);
     let s1 = edge_side(t[1], t[2], p);
     let s2 = edge_side(t[2], t[0], p);
     s0 == s1 && s1 == s2
+}
+
+/// Whether the triangle's projection on the XY plane has non-zero area (decided exactly).
+#[inline]
+pub fn has_projected_area(t: &GridTriangle) -> bool {
+    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
+    orient2d(xy(t[0]), xy(t[1]), xy(t[2])) != 0.0
 }
 
 /// The z where the triangle's plane meets the column through `p` (the triangle must cover the column).
