@@ -104,6 +104,24 @@ impl FootprintTest {
     }
 }
 
+/// The cell holding coordinate `v` along an axis of `cells` cells (clamped to the grid).
+#[inline]
+fn cell_of(v: f64, cells: u32) -> u32 {
+    // Clamped first, so truncation is the floor (and avoids a libm call).
+    v.clamp(0.0, f64::from(cells) - 1.0) as u32
+}
+
+/// The last cell that the extent [`from`, `to`] along an axis of `cells` cells reaches with positive length:
+/// the cell of `to`, or the one before when `to` is a whole number (a cell boundary) above `from` (clamped to
+/// the grid). `to` is clamped to [0, `cells`] before its floor is taken, and only a `to` in that range can
+/// equal its floor.
+#[inline]
+fn last_cell_of(from: f64, to: f64, cells: u32) -> u32 {
+    let floor = to.max(0.0).min(f64::from(cells)) as u32;
+    let boundary = to > from && floor > 0 && f64::from(floor) == to;
+    (floor - u32::from(boundary)).min(cells - 1)
+}
+
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
@@ -120,13 +138,8 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let corners = t.map(|w| w.to_array());
     let lo = t[0].min(t[1]).min(t[2]).to_array();
     let hi = t[0].max(t[1]).max(t[2]).to_array();
-    let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
-    // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
-    let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
-    // The last cell that the extent [from, to] along axis `a` reaches with positive length. (`to` is a whole
-    // number when the round trip through i64 keeps it; beyond i64's range, `to − 1` is `to` anyway.)
-    let whole = |to: f64| to == (to as i64) as f64;
-    let last_cell_of = |a: usize, from: f64, to: f64| cell_of(a, if to > from && whole(to) { to - 1.0 } else { to });
+    let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
+    let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
     let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
     let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
     let mut push = |c: [u32; 3]| {
@@ -157,6 +170,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
         let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
         let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
+        let Some(row) = tester.row(f64::from(iu) + 0.5) else { continue };
         for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
             let test = inside.place(iu, iv);
             if test == Test::Outside {
@@ -179,8 +193,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
             if ids.is_empty() {
                 continue;
             }
-            let center = [f64::from(iu) + 0.5, f64::from(iv) + 0.5];
-            let Some(column) = tester.column(center, test == Test::Full) else { continue };
+            let Some(column) = tester.column(&row, f64::from(iv) + 0.5, test == Test::Full) else { continue };
             for id in ids {
                 if column.overlaps(f64::from(id) + 0.5) {
                     let mut c = [0u32; 3];
@@ -293,6 +306,26 @@ mod tests {
             }
         }
         assert!(inside_cells > 10_000 && outside_cells > 10_000, "{inside_cells} inside, {outside_cells} outside");
+    }
+
+    #[test]
+    fn extents_ending_on_a_boundary_stop_before_it() {
+        assert_eq!([cell_of(-2.0, 10), cell_of(3.7, 10), cell_of(10.0, 10), cell_of(f64::NAN, 10)], [0, 3, 9, 0]);
+        let cases = [
+            ((0.2, 3.0), 2),      // ends on the boundary of cell 3: does not reach it
+            ((0.2, 3.5), 3),      // ends inside cell 3
+            ((3.0, 3.0), 3),      // a point on the boundary: the cell above it
+            ((-5.0, 0.0), 0),     // ends on the grid's lower face
+            ((0.5, 10.0), 9),     // ends on the grid's upper face
+            ((0.5, 12.0), 9),     // beyond the grid
+            ((-9.0, -3.0), 0),    // wholly below it
+            ((0.0, f64::NAN), 0), // no extent
+            ((0.0, 1e300), 9),    // whole, far beyond the grid
+            ((0.0, f64::INFINITY), 9),
+        ];
+        for ((from, to), last) in cases {
+            assert_eq!(last_cell_of(from, to, 10), last, "[{from}, {to}]");
+        }
     }
 
     #[test]

@@ -34,13 +34,6 @@ impl EdgeAxis {
     fn meets(&self, c: f64) -> bool {
         self.lo - c <= self.reach && self.hi - c >= -self.reach
     }
-
-    /// The direction · a cell centre without its component along the column. The product of the zero
-    /// component is an exact zero, so adding it changes nothing.
-    #[inline]
-    fn across_dot(&self, center: [f64; 2]) -> f64 {
-        self.across[0] * center[0] + self.across[1] * center[1]
-    }
 }
 
 /// A triangle prepared for the overlap tests of the unit cells of columns along axis `d`.
@@ -102,26 +95,44 @@ impl CellTester {
         tester
     }
 
-    /// The column of cells whose centres lie at `center` across axis `d` (along `(d + 1) % 3` and
-    /// `(d + 2) % 3`), or `None` when no cell of it overlaps the triangle. With `edges` false only the box axes
-    /// and the plane are tested (as [`BoxTester::overlaps_plane`](crate::geom::BoxTester::overlaps_plane)).
+    /// The row of columns whose cell centres lie at `cu` along axis `(d + 1) % 3`, or `None` when no cell of
+    /// it overlaps the triangle.
     #[inline]
-    pub fn column(&self, center: [f64; 2], edges: bool) -> Option<Column<'_>> {
-        if (0..2).any(|k| self.lo_across[k] - center[k] > HALF || self.hi_across[k] - center[k] < -HALF) {
+    pub fn row(&self, cu: f64) -> Option<Row> {
+        if self.lo_across[0] - cu > HALF || self.hi_across[0] - cu < -HALF {
             return None;
         }
-        if edges && !self.column_axes[..self.column_axis_count].iter().all(|a| a.meets(a.across_dot(center))) {
+        Some(Row {
+            column_terms: std::array::from_fn(|k| self.column_axes[k].across[0] * cu),
+            cell_terms: std::array::from_fn(|k| self.cell_axes[k].across[0] * cu),
+            plane_term: self.normal_across[0] * cu,
+        })
+    }
+
+    /// The column of `row` whose cell centres lie at `cv` along axis `(d + 2) % 3`, or `None` when no cell of
+    /// it overlaps the triangle. With `edges` false only the box axes and the plane are tested (as
+    /// [`BoxTester::overlaps_plane`](crate::geom::BoxTester::overlaps_plane)).
+    #[inline]
+    pub fn column(&self, row: &Row, cv: f64, edges: bool) -> Option<Column<'_>> {
+        if self.lo_across[1] - cv > HALF || self.hi_across[1] - cv < -HALF {
+            return None;
+        }
+        // A direction · a cell centre without its component along d (the product of the zero component is an
+        // exact zero): the row's product plus this column's, in that order.
+        let mut columns = self.column_axes[..self.column_axis_count].iter().zip(row.column_terms);
+        if edges && !columns.all(|(a, term)| a.meets(term + a.across[1] * cv)) {
             return None;
         }
         let mut bases = [0.0; 6];
         if edges {
-            for (base, axis) in bases.iter_mut().zip(&self.cell_axes[..self.cell_axis_count]) {
-                *base = axis.across_dot(center);
+            let cells = self.cell_axes[..self.cell_axis_count].iter().zip(row.cell_terms);
+            for (base, (axis, term)) in bases.iter_mut().zip(cells) {
+                *base = term + axis.across[1] * cv;
             }
         }
         // n · c summed in the order x, y, z, as `DVec3::dot` does, with the product along `d` added per cell:
         // (along + first) + second.
-        let [pu, pv] = [0, 1].map(|k| self.normal_across[k] * center[k]);
+        let (pu, pv) = (row.plane_term, self.normal_across[1] * cv);
         let plane_terms = match self.d {
             0 => [pu, pv],       // x = d, y = u, z = v
             1 => [pv, pu],       // x = v, y = d, z = u (x + y = y + x exactly)
@@ -129,6 +140,14 @@ impl CellTester {
         };
         Some(Column { tester: self, plane_terms, bases, edges })
     }
+}
+
+/// The products of a row of columns that do not depend on the column: each edge direction's and the
+/// normal's component along `(d + 1) % 3` times the row's centre coordinate.
+pub(super) struct Row {
+    column_terms: [f64; 3],
+    cell_terms: [f64; 6],
+    plane_term: f64,
 }
 
 /// One column of cells along a [`CellTester`]'s axis.
@@ -195,7 +214,8 @@ mod tests {
                     for edges in [false, true] {
                         let mut center = DVec3::ZERO;
                         (center[u], center[v]) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5);
-                        let column = tester.column([center[u], center[v]], edges);
+                        let row = tester.row(center[u]);
+                        let column = row.and_then(|row| tester.column(&row, center[v], edges));
                         for id in 0..9 {
                             center[d] = f64::from(id) + 0.5;
                             let expected =
