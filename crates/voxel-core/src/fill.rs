@@ -163,10 +163,10 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
     let per_task = triangles_per_task(tris.len());
-    let crossings: Vec<Crossing> = tris
+    let parts: Vec<Vec<Crossing>> = tris
         .par_chunks(per_task)
         .enumerate()
-        .flat_map_iter(|(chunk_index, chunk)| {
+        .map(|(chunk_index, chunk)| {
             let mut out = Vec::new();
             for (k, t) in chunk.iter().enumerate() {
                 let triangle = (chunk_index * per_task + k) as u32;
@@ -186,7 +186,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
     // Made triangle-major: a stable sort by column keeps the triangles' order, then each column's few
     // crossings are sorted by depth.
     let count = spec.dims[0] as usize * ny as usize;
-    let mut crossings = radix::sort_by_key(crossings, radix::bits_for(count), |c| c.column);
+    let mut crossings = radix::sort_parts_by_key(parts, radix::bits_for(count), |c| c.column);
     crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
     Columns::from_sorted(count, crossings)
 }

@@ -229,20 +229,23 @@ impl Neighbour {
 
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let pairs: Vec<u64> = (0..tris.len())
+    let parts: Vec<Vec<u64>> = (0..tris.len())
         .into_par_iter()
         .fold(Vec::new, |mut out, tri| {
             overlaps(spec, tris, tri, fill, &mut out);
             out
         })
-        .reduce(Vec::new, |mut a, mut b| {
-            a.append(&mut b);
-            a
-        });
-    // The fold and reduce keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
-    let pairs = radix::sort_by_key(pairs, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
+        .collect();
+    // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
+    let pairs = radix::sort_parts_by_key(parts, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
     // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
-    let mut shell = Shell { offsets: vec![0], tris: Vec::with_capacity(pairs.len()), ..Shell::default() };
+    let mut shell = Shell {
+        cells: Vec::with_capacity(pairs.len()),
+        offsets: Vec::with_capacity(pairs.len() + 1),
+        tris: Vec::with_capacity(pairs.len()),
+        thin: Vec::with_capacity(pairs.len()),
+    };
+    shell.offsets.push(0);
     for p in pairs {
         let (cell, tri, thin) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
         match shell.cells.last() {
