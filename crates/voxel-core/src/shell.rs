@@ -147,10 +147,11 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
         out.push(pack(index, tri, thin));
     };
-    let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
-    if lo_cell == [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])) {
+    // The cells of the triangle's extent.
+    let (first, last) = ([0, 1, 2].map(|a| cell_of(a, lo[a])), [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])));
+    if first == last {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
-        push(lo_cell);
+        push(first);
         return;
     }
     let an = n.abs();
@@ -166,12 +167,12 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let inside = FootprintTest::new(&corners, n[d].signum(), u, v);
     let tester = CellTester::new(t, d, lo, hi);
     let t0 = corners[0];
-    for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
+    for iu in first[u]..=last[u] {
         // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
         let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
         let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
         let Some(row) = tester.row(f64::from(iu) + 0.5) else { continue };
-        for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
+        for iv in first[v]..=last[v] {
             let test = inside.place(iu, iv);
             if test == Test::Outside {
                 continue;
