@@ -11,45 +11,48 @@ pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl
 }
 
 /// [`sort_by_key`] of the concatenation of `parts` (the lists of parallel tasks), without concatenating them
-/// first: the first pass reads the parts. The counts of every pass's digits are taken in one read.
+/// first: the first pass reads the parts.
 pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
-    let passes = bits.div_ceil(DIGIT_BITS) as usize;
+    let passes = bits.div_ceil(DIGIT_BITS);
     if passes == 0 {
         return parts.concat();
     }
     let mask = (1u32 << DIGIT_BITS) - 1;
-    let mut starts = vec![[0usize; 1 << DIGIT_BITS]; passes];
-    for item in parts.iter().flatten() {
-        let k = key(item);
-        for (pass, counts) in starts.iter_mut().enumerate() {
-            counts[(k >> (pass as u32 * DIGIT_BITS) & mask) as usize] += 1;
-        }
-    }
-    for counts in &mut starts {
-        let mut total = 0;
-        for start in counts.iter_mut() {
-            (*start, total) = (total, total + *start);
-        }
-    }
+    let key = &key;
+    let digit = |pass: u32| move |item: &T| (key(item) >> (pass * DIGIT_BITS) & mask) as usize;
     let len = parts.iter().map(Vec::len).sum();
-    let scatter = |items: &mut dyn Iterator<Item = &T>, sorted: &mut [T], starts: &mut [usize], pass: usize| {
-        for item in items {
-            let d = (key(item) >> (pass as u32 * DIGIT_BITS) & mask) as usize;
-            sorted[starts[d]] = *item;
-            starts[d] += 1;
-        }
-    };
     let mut items = vec![T::default(); len];
-    scatter(&mut parts.iter().flatten(), &mut items, &mut starts[0], 0);
+    counting_pass(parts.iter().flatten(), &mut items, digit(0));
     drop(parts);
     if passes > 1 {
         let mut sorted = vec![T::default(); len];
-        for (pass, starts) in starts.iter_mut().enumerate().skip(1) {
-            scatter(&mut items.iter(), &mut sorted, starts, pass);
+        for pass in 1..passes {
+            counting_pass(items.iter(), &mut sorted, digit(pass));
             std::mem::swap(&mut items, &mut sorted);
         }
     }
     items
+}
+
+/// One stable counting sort of `items` by `digit` (below 2^`DIGIT_BITS`) into `sorted`.
+fn counting_pass<'a, T: Copy + 'a>(
+    items: impl Iterator<Item = &'a T> + Clone,
+    sorted: &mut [T],
+    digit: impl Fn(&T) -> usize,
+) {
+    let mut starts = vec![0usize; 1 << DIGIT_BITS];
+    for item in items.clone() {
+        starts[digit(item)] += 1;
+    }
+    let mut total = 0;
+    for start in &mut starts {
+        (*start, total) = (total, total + *start);
+    }
+    for item in items {
+        let d = digit(item);
+        sorted[starts[d]] = *item;
+        starts[d] += 1;
+    }
 }
 
 /// The bits a key below `count` needs.

@@ -229,6 +229,9 @@ impl Neighbour {
 }
 
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
+// Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
+// `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
+#[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
     let parts: Vec<Vec<u64>> = (0..tris.len())
         .into_par_iter()
