@@ -103,7 +103,8 @@ pub(crate) fn for_each_edge_axis(t: &GridTriangle, mut f: impl FnMut(usize, [f64
 /// and for each of the nine edge × box-axis directions that is not zero, the direction and the range of the
 /// triangle's corners projected on it. A test then projects only the box centre. Grid coordinates are
 /// multiples of a power-of-two step with at most about 20 significant bits, so these products and sums are
-/// exact in f64 and give the same answers as projecting each corner relative to the box centre.
+/// exact in f64 and give the same answers as projecting each corner relative to the box centre. The shell
+/// runs the same test for unit cells arranged by columns (`shell/cells.rs`), checked against this one.
 pub struct BoxTester {
     lo: DVec3,
     hi: DVec3,
