@@ -111,35 +111,36 @@ fn triangles_per_task(count: usize) -> usize {
 /// column.
 const SEARCHED_ROW: usize = 8;
 
-/// The columns of `ys` in the row of column centres x = `px` that triangle `t` covers ([`covers_column`]).
+/// Whether the projection of triangle `t` on the XY plane runs counter-clockwise, or `None` when it has zero
+/// area (then it covers no column).
+fn projected_orientation(t: &GridTriangle) -> Option<bool> {
+    has_projected_area(t).then(|| edge_side(t[0], t[1], [t[2].x, t[2].y]))
+}
+
+/// The columns of `ys` in the row of column centres x = `px` that triangle `t` covers ([`covers_column`]);
+/// `ys` lies within the triangle's extent along y and `counter_clockwise` is its [`projected_orientation`].
 ///
-/// They form one run: along the row each edge's side test changes at most once (the edge function is linear
-/// in y, and a tie is broken the same way all along the row), and a column is covered exactly when all three
-/// sides match the triangle's orientation (under the tie-break's perturbation a point cannot lie on the wrong
-/// side of all three edges). A long row is searched for where each edge's side changes (a binary search of
-/// the exact test); a short one is tested column by column.
-fn covered_run(t: &GridTriangle, px: f64, ys: std::ops::Range<u32>) -> std::ops::Range<u32> {
-    let p = |y: u32| [px, f64::from(y) + 0.5];
+/// A column is covered exactly when it lies on the inner side of all three edges: under the tie-break's
+/// perturbation a point cannot lie on the outer side of all three, the other case [`covers_column`] accepts.
+/// The covered columns form one run: along the row each edge's side test changes at most once (the edge
+/// function is linear in y, and a tie is broken the same way all along the row). A long row is searched for
+/// where each edge's side changes (a binary search of the exact test); a short one is tested column by column.
+fn covered_run(t: &GridTriangle, counter_clockwise: bool, px: f64, ys: std::ops::Range<u32>) -> std::ops::Range<u32> {
+    let inside = |k: usize, y: u32| edge_side(t[k], t[(k + 1) % 3], [px, f64::from(y) + 0.5]) == counter_clockwise;
     if ys.len() < SEARCHED_ROW {
-        let mut covered = ys.filter(|&y| covers_column(t, p(y)));
+        let mut covered = ys.filter(|&y| (0..3).all(|k| inside(k, y)));
         let first = covered.next();
         let last = covered.next_back().or(first);
         return first.zip(last).map_or(0..0, |(first, last)| first..last + 1);
     }
-    if !has_projected_area(t) {
-        return 0..0;
-    }
-    let counter_clockwise = edge_side(t[0], t[1], [t[2].x, t[2].y]);
     let (mut start, mut end) = (ys.start, ys.end);
     for k in 0..3 {
-        let inside = |y: u32| edge_side(t[k], t[(k + 1) % 3], p(y)) == counter_clockwise;
-        let (first, last) = (inside(start), inside(end - 1));
-        match (first, last) {
+        match (inside(k, start), inside(k, end - 1)) {
             (true, true) => {}
             (false, false) => return 0..0,
             // The inside columns are a prefix of start..end: find where they stop; or a suffix.
-            (true, false) => end = first_where(start..end, |y| !inside(y)),
-            (false, true) => start = first_where(start..end, inside),
+            (true, false) => end = first_where(start..end, |y| !inside(k, y)),
+            (false, true) => start = first_where(start..end, |y| inside(k, y)),
         }
         if start >= end {
             return 0..0;
@@ -170,11 +171,12 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
             let mut out = Vec::new();
             for (k, t) in chunk.iter().enumerate() {
                 let triangle = (chunk_index * per_task + k) as u32;
+                let Some(counter_clockwise) = projected_orientation(t) else { continue };
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 for x in xs {
                     let px = f64::from(x) + 0.5;
-                    for y in covered_run(t, px, ys.clone()) {
+                    for y in covered_run(t, counter_clockwise, px, ys.clone()) {
                         let p = [px, f64::from(y) + 0.5];
                         out.push(Crossing { column: x * ny + y, triangle, z: depth_at(t, p) });
                     }
@@ -426,11 +428,8 @@ mod tests {
                 for ys in [0..40, 3..17, 10..14] {
                     let expected: Vec<u32> =
                         ys.clone().filter(|&y| covers_column(&t, [px, f64::from(y) + 0.5])).collect();
-                    assert_eq!(
-                        covered_run(&t, px, ys.clone()).collect::<Vec<_>>(),
-                        expected,
-                        "{t:?} at x = {px}, {ys:?}"
-                    );
+                    let run = projected_orientation(&t).map_or(0..0, |ccw| covered_run(&t, ccw, px, ys.clone()));
+                    assert_eq!(run.collect::<Vec<_>>(), expected, "{t:?} at x = {px}, {ys:?}");
                     covered += expected.len();
                 }
             }
