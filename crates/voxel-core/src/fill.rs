@@ -171,9 +171,12 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
             let mut out = Vec::new();
             for (k, t) in chunk.iter().enumerate() {
                 let triangle = (chunk_index * per_task + k) as u32;
-                let Some(counter_clockwise) = projected_orientation(t) else { continue };
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
+                if xs.is_empty() || ys.is_empty() {
+                    continue; // no column centre under the triangle's extent
+                }
+                let Some(counter_clockwise) = projected_orientation(t) else { continue };
                 for x in xs {
                     let px = f64::from(x) + 0.5;
                     for y in covered_run(t, counter_clockwise, px, ys.clone()) {
