@@ -122,6 +122,9 @@ fn last_cell_of(from: f64, to: f64, cells: u32) -> u32 {
     (floor - u32::from(boundary)).min(cells - 1)
 }
 
+/// Up to this many candidate columns, a triangle's footprints are not placed against its projection.
+const FEW_COLUMNS: u32 = 9;
+
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
@@ -164,7 +167,11 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let n = n.to_array();
-    let inside = FootprintTest::new(&corners, n[d].signum(), u, v);
+    // Placing the footprints pays for itself only where some lie well inside or outside the projection; a
+    // triangle spanning a few columns gets the whole test everywhere (the same cells: the placement only
+    // skips tests whose outcome it knows).
+    let columns = (last[u] - first[u] + 1) * (last[v] - first[v] + 1);
+    let inside = (columns > FEW_COLUMNS).then(|| FootprintTest::new(&corners, n[d].signum(), u, v));
     let tester = CellTester::new(t, d, lo, hi);
     let t0 = corners[0];
     for iu in first[u]..=last[u] {
@@ -173,7 +180,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
         let Some(row) = tester.row(f64::from(iu) + 0.5) else { continue };
         for iv in first[v]..=last[v] {
-            let test = inside.place(iu, iv);
+            let test = inside.as_ref().map_or(Test::Full, |inside| inside.place(iu, iv));
             if test == Test::Outside {
                 continue;
             }
