@@ -31,7 +31,7 @@ use obvhs::aabb::Aabb;
 use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
-use crate::geom::{GridTriangle, covers_column, depth_at};
+use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, has_projected_area};
 use crate::grid::{BitGrid, GridSpec};
 use crate::orient::{Role, closed_parts, winding_roles};
 use crate::radix;
@@ -101,25 +101,87 @@ fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
     first as u32..last as u32 + 1
 }
 
+/// Triangles per task of the rasterization: small enough that both threads share out a few big triangles
+/// (a box has twelve, four of which cross every column), at most 2048.
+fn triangles_per_task(count: usize) -> usize {
+    count.div_ceil(rayon::current_num_threads() * 8).clamp(1, 2048)
+}
+
+/// Rows of at least this many columns are searched for the ends of their covered run instead of testing every
+/// column.
+const SEARCHED_ROW: usize = 8;
+
+/// Whether the projection of triangle `t` on the XY plane runs counter-clockwise, or `None` when it has zero
+/// area (then it covers no column).
+fn projected_orientation(t: &GridTriangle) -> Option<bool> {
+    has_projected_area(t).then(|| edge_side(t[0], t[1], [t[2].x, t[2].y]))
+}
+
+/// The columns of `ys` in the row of column centres x = `px` that triangle `t` covers ([`covers_column`]);
+/// `ys` lies within the triangle's extent along y and `counter_clockwise` is its [`projected_orientation`].
+///
+/// A column is covered exactly when it lies on the inner side of all three edges: under the tie-break's
+/// perturbation a point cannot lie on the outer side of all three, the other case [`covers_column`] accepts.
+/// The covered columns form one run: along the row each edge's side test changes at most once (the edge
+/// function is linear in y, and a tie is broken the same way all along the row). A long row is searched for
+/// where each edge's side changes (a binary search of the exact test); a short one is tested column by column.
+fn covered_run(t: &GridTriangle, counter_clockwise: bool, px: f64, ys: std::ops::Range<u32>) -> std::ops::Range<u32> {
+    let inside = |k: usize, y: u32| edge_side(t[k], t[(k + 1) % 3], [px, f64::from(y) + 0.5]) == counter_clockwise;
+    if ys.len() < SEARCHED_ROW {
+        let mut covered = ys.filter(|&y| (0..3).all(|k| inside(k, y)));
+        let first = covered.next();
+        let last = covered.next_back().or(first);
+        return first.zip(last).map_or(0..0, |(first, last)| first..last + 1);
+    }
+    let (mut start, mut end) = (ys.start, ys.end);
+    for k in 0..3 {
+        match (inside(k, start), inside(k, end - 1)) {
+            (true, true) => {}
+            (false, false) => return 0..0,
+            // The inside columns are a prefix of start..end: find where they stop; or a suffix.
+            (true, false) => end = first_where(start..end, |y| !inside(k, y)),
+            (false, true) => start = first_where(start..end, |y| inside(k, y)),
+        }
+        if start >= end {
+            return 0..0;
+        }
+    }
+    start..end
+}
+
+/// The first `y` of `ys` where `holds(y)`, which holds from some point of `ys` on (else `ys.end`).
+fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
+    let (mut lo, mut hi) = (ys.start, ys.end);
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if holds(mid) { hi = mid } else { lo = mid + 1 }
+    }
+    lo
+}
+
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
 /// consistent tie-break of [`covers_column`].
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
-    let crossings: Vec<Crossing> = tris
-        .par_chunks(2048)
+    let per_task = triangles_per_task(tris.len());
+    let parts: Vec<Vec<Crossing>> = tris
+        .par_chunks(per_task)
         .enumerate()
-        .flat_map_iter(|(chunk_index, chunk)| {
+        .map(|(chunk_index, chunk)| {
             let mut out = Vec::new();
             for (k, t) in chunk.iter().enumerate() {
-                let triangle = (chunk_index * 2048 + k) as u32;
+                let triangle = (chunk_index * per_task + k) as u32;
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
+                if xs.is_empty() || ys.is_empty() {
+                    continue; // no column centre under the triangle's extent
+                }
+                let Some(counter_clockwise) = projected_orientation(t) else { continue };
                 for x in xs {
-                    for y in ys.clone() {
-                        let p = [f64::from(x) + 0.5, f64::from(y) + 0.5];
-                        if covers_column(t, p) {
-                            out.push(Crossing { column: x * ny + y, triangle, z: depth_at(t, p) });
-                        }
+                    let px = f64::from(x) + 0.5;
+                    for y in covered_run(t, counter_clockwise, px, ys.clone()) {
+                        let p = [px, f64::from(y) + 0.5];
+                        out.push(Crossing { column: x * ny + y, triangle, z: depth_at(t, p) });
                     }
                 }
             }
@@ -129,7 +191,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
     // Made triangle-major: a stable sort by column keeps the triangles' order, then each column's few
     // crossings are sorted by depth.
     let count = spec.dims[0] as usize * ny as usize;
-    let mut crossings = radix::sort_by_key(crossings, radix::bits_for(count), |c| c.column);
+    let mut crossings = radix::sort_parts_by_key(parts, radix::bits_for(count), |c| c.column);
     crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
     Columns::from_sorted(count, crossings)
 }
@@ -343,6 +405,36 @@ mod tests {
         assert_eq!(runs(&[(1.2, P), (3.2, L), (5.2, E), (7.2, P)]), vec![1..3, 5..7]);
         // An odd parity column ignores its parity crossings but keeps the winding part.
         assert_eq!(runs(&[(0.2, P), (1.2, E), (3.2, L)]), vec![1..3]);
+    }
+
+    #[test]
+    fn covered_runs_are_the_columns_that_pass_the_column_test() {
+        // Corners on a lattice of half cells (edges through column centres: the tie-break) and finer ones.
+        let mut state = 5u64;
+        let mut next = |steps: u64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) % steps
+        };
+        let mut covered = 0;
+        for k in 0..3000 {
+            let step = [0.5, 1.0 / 64.0][k % 2];
+            let t: GridTriangle = std::array::from_fn(|_| {
+                let mut c = [0.0; 3];
+                c.iter_mut().for_each(|c| *c = next((40.0 / step) as u64) as f64 * step);
+                glam::DVec3::from_array(c)
+            });
+            for x in 0..40 {
+                let px = f64::from(x) + 0.5;
+                for ys in [0..40, 3..17, 10..14] {
+                    let expected: Vec<u32> =
+                        ys.clone().filter(|&y| covers_column(&t, [px, f64::from(y) + 0.5])).collect();
+                    let run = projected_orientation(&t).map_or(0..0, |ccw| covered_run(&t, ccw, px, ys.clone()));
+                    assert_eq!(run.collect::<Vec<_>>(), expected, "{t:?} at x = {px}, {ys:?}");
+                    covered += expected.len();
+                }
+            }
+        }
+        assert!(covered > 100_000, "{covered}");
     }
 
     #[test]

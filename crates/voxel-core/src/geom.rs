@@ -34,14 +34,20 @@ pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
     if outside(t[0].x, t[1].x, t[2].x, p[0]) || outside(t[0].y, t[1].y, t[2].y, p[1]) {
         return false;
     }
-    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
-    if orient2d(xy(t[0]), xy(t[1]), xy(t[2])) == 0.0 {
+    if !has_projected_area(t) {
         return false;
     }
     let s0 = edge_side(t[0], t[1], p);
     let s1 = edge_side(t[1], t[2], p);
     let s2 = edge_side(t[2], t[0], p);
     s0 == s1 && s1 == s2
+}
+
+/// Whether the triangle's projection on the XY plane has non-zero area (decided exactly).
+#[inline]
+pub fn has_projected_area(t: &GridTriangle) -> bool {
+    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
+    orient2d(xy(t[0]), xy(t[1]), xy(t[2])) != 0.0
 }
 
 /// The z where the triangle's plane meets the column through `p` (the triangle must cover the column).
@@ -60,13 +66,45 @@ pub fn depth_at(t: &GridTriangle, p: [f64; 2]) -> f64 {
     z.clamp(a.z.min(b.z).min(c.z), a.z.max(b.z).max(c.z))
 }
 
+/// The normal of the separating axis test's plane: (t1 − t0) × (t2 − t1).
+#[inline]
+pub(crate) fn triangle_normal(t: &GridTriangle) -> DVec3 {
+    (t[1] - t[0]).cross(t[2] - t[1])
+}
+
+/// Calls `f(k, axis, lo, hi)` for each non-zero direction edge × box axis k of the separating axis test (its
+/// k component is zero), with the range [lo, hi] of the triangle's corners projected on it. The projections
+/// are the sums of the two products of the non-zero components: the third product is an exact zero, so this
+/// is `DVec3::dot`'s value.
+#[inline]
+pub(crate) fn for_each_edge_axis(t: &GridTriangle, mut f: impl FnMut(usize, [f64; 3], f64, f64)) {
+    let corners = t.map(|w| w.to_array());
+    for e in [t[1] - t[0], t[2] - t[1], t[0] - t[2]] {
+        let e = e.to_array();
+        for k in 0..3 {
+            // e × (the unit vector along k) is −e[j] along i and e[i] along j.
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let (ai, aj) = (-e[j], e[i]);
+            if ai != 0.0 || aj != 0.0 {
+                let [p0, p1, p2] = corners.map(|w| ai * w[i] + aj * w[j]);
+                let mut axis = [0.0; 3];
+                (axis[i], axis[j]) = (ai, aj);
+                // Finite values: plain comparisons pick the same extremes as `f64::min` and `f64::max`.
+                let (lo, hi) = if p0 < p1 { (p0, p1) } else { (p1, p0) };
+                f(k, axis, if p2 < lo { p2 } else { lo }, if p2 > hi { p2 } else { hi });
+            }
+        }
+    }
+}
+
 /// A triangle prepared for many box-overlap tests against cells (separating axis test of Akenine-Möller).
 ///
 /// Everything that depends only on the triangle is computed once: its extent along the box axes, its plane,
 /// and for each of the nine edge × box-axis directions that is not zero, the direction and the range of the
 /// triangle's corners projected on it. A test then projects only the box centre. Grid coordinates are
 /// multiples of a power-of-two step with at most about 20 significant bits, so these products and sums are
-/// exact in f64 and give the same answers as projecting each corner relative to the box centre.
+/// exact in f64 and give the same answers as projecting each corner relative to the box centre. The shell
+/// runs the same test for unit cells arranged by columns (`shell/cells.rs`), checked against this one.
 pub struct BoxTester {
     lo: DVec3,
     hi: DVec3,
@@ -82,20 +120,13 @@ pub struct BoxTester {
 impl BoxTester {
     /// Prepares triangle `t`.
     pub fn new(t: &GridTriangle) -> Self {
-        let edges = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
-        let normal = edges[0].cross(edges[1]);
+        let normal = triangle_normal(t);
         let mut axes = [(DVec3::ZERO, 0.0, 0.0); 9];
         let mut axis_count = 0;
-        for e in edges {
-            // The cross products of the edge with the x, y and z axes.
-            for axis in [DVec3::new(0.0, -e.z, e.y), DVec3::new(e.z, 0.0, -e.x), DVec3::new(-e.y, e.x, 0.0)] {
-                if axis != DVec3::ZERO {
-                    let p = t.map(|v| axis.dot(v));
-                    axes[axis_count] = (axis, p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-                    axis_count += 1;
-                }
-            }
-        }
+        for_each_edge_axis(t, |_, axis, lo, hi| {
+            axes[axis_count] = (DVec3::from_array(axis), lo, hi);
+            axis_count += 1;
+        });
         Self {
             lo: t[0].min(t[1]).min(t[2]),
             hi: t[0].max(t[1]).max(t[2]),

@@ -4,11 +4,13 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::geom::{BoxTester, GridTriangle};
+use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSpec};
 use crate::radix;
 
+mod cells;
 mod octree;
+use cells::CellTester;
 pub(crate) use octree::ShellOctree;
 
 /// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
@@ -51,18 +53,11 @@ fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
     (cell as u64) << 32 | (tri as u64) << 1 | u64::from(thin)
 }
 
-/// Whether the cell at `c + step` exists and is filled.
-fn filled_at(spec: &GridSpec, fill: &BitGrid, c: [u32; 3], step: [i32; 3]) -> bool {
-    spec.step(c, step).is_some_and(|n| fill.get(spec.index(n[0], n[1], n[2])))
-}
-
 /// How much of the triangle–box test a candidate cell needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Test {
     /// No test: the cell's footprint lies outside the triangle's projection.
     Outside,
-    /// None: the cell holds the whole triangle.
-    Known,
     /// The box axes and the plane: the cell's footprint lies inside the triangle's projection.
     Plane,
     /// The whole separating axis test.
@@ -81,7 +76,7 @@ struct FootprintTest {
 
 impl FootprintTest {
     /// Prepares triangle `t` projected on axes `u` and `v`; `orientation` is the sign of its projected area.
-    fn new(t: &GridTriangle, orientation: f64, u: usize, v: usize) -> Self {
+    fn new(t: &[[f64; 3]; 3], orientation: f64, u: usize, v: usize) -> Self {
         let edges = [0, 1, 2].map(|k| {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             let dir = [(b[u] - a[u]) * orientation, (b[v] - a[v]) * orientation];
@@ -109,6 +104,27 @@ impl FootprintTest {
     }
 }
 
+/// The cell holding coordinate `v` along an axis of `cells` cells (clamped to the grid).
+#[inline]
+fn cell_of(v: f64, cells: u32) -> u32 {
+    // Clamped first, so truncation is the floor (and avoids a libm call).
+    v.clamp(0.0, f64::from(cells) - 1.0) as u32
+}
+
+/// The last cell that the extent [`from`, `to`] along an axis of `cells` cells reaches with positive length:
+/// the cell of `to`, or the one before when `to` is a whole number (a cell boundary) above `from` (clamped to
+/// the grid). `to` is clamped to [0, `cells`] before its floor is taken, and only a `to` in that range can
+/// equal its floor.
+#[inline]
+fn last_cell_of(from: f64, to: f64, cells: u32) -> u32 {
+    let floor = to.max(0.0).min(f64::from(cells)) as u32;
+    let boundary = to > from && floor > 0 && f64::from(floor) == to;
+    (floor - u32::from(boundary)).min(cells - 1)
+}
+
+/// Up to this many candidate columns, a triangle's footprints are not placed against its projection.
+const FEW_COLUMNS: u32 = 9;
+
 /// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
@@ -122,38 +138,23 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     }
     let step = normal_step(n);
     let back = step.map(|s| -s);
-    let lo = t[0].min(t[1]).min(t[2]);
-    let hi = t[0].max(t[1]).max(t[2]);
-    let last = |a: usize| f64::from(spec.dims[a]) - 1.0;
-    // Values are clamped to the grid first, so truncation is the floor (and avoids a libm call).
-    let cell_of = |a: usize, v: f64| v.clamp(0.0, last(a)) as u32;
-    // The last cell that the extent [from, to] along axis `a` reaches with positive length. (`to` is a whole
-    // number when the round trip through i64 keeps it; beyond i64's range, `to − 1` is `to` anyway.)
-    let whole = |to: f64| to == (to as i64) as f64;
-    let last_cell_of = |a: usize, from: f64, to: f64| cell_of(a, if to > from && whole(to) { to - 1.0 } else { to });
-    // Only triangles with candidate cells near their edges need the full test.
-    let tester = std::cell::OnceCell::new();
-    let tester = || tester.get_or_init(|| BoxTester::new(t));
-    let mut emit = |c: [u32; 3], test: Test| {
-        let center = DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5);
-        let half = DVec3::splat(0.5);
-        let overlaps = match test {
-            Test::Outside => false,
-            Test::Known => true,
-            Test::Plane => tester().overlaps_plane(center, half),
-            Test::Full => tester().overlaps(center, half),
-        };
-        if !overlaps {
-            return;
-        }
-        let index = spec.index(c[0], c[1], c[2]);
-        let thin = !fill.get(index) && !filled_at(spec, fill, c, step) && !filled_at(spec, fill, c, back);
+    let corners = t.map(|w| w.to_array());
+    let lo = t[0].min(t[1]).min(t[2]).to_array();
+    let hi = t[0].max(t[1]).max(t[2]).to_array();
+    let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
+    let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
+    let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
+    let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
+    let mut push = |c: [u32; 3]| {
+        let index = c[0] as usize * strides[0] + c[1] as usize * strides[1] + c[2] as usize;
+        let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
         out.push(pack(index, tri, thin));
     };
-    let lo_cell = [0, 1, 2].map(|a| cell_of(a, lo[a]));
-    if lo_cell == [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])) {
+    // The cells of the triangle's extent.
+    let (first, last) = ([0, 1, 2].map(|a| cell_of(a, lo[a])), [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])));
+    if first == last {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
-        emit(lo_cell, Test::Known);
+        push(first);
         return;
     }
     let an = n.abs();
@@ -165,54 +166,97 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
         2
     };
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
-    let inside = FootprintTest::new(t, n[d].signum(), u, v);
-    for iu in cell_of(u, lo[u])..=last_cell_of(u, lo[u], hi[u]) {
-        for iv in cell_of(v, lo[v])..=last_cell_of(v, lo[v], hi[v]) {
-            let test = inside.place(iu, iv);
+    let n = n.to_array();
+    // Placing the footprints pays for itself only where some lie well inside or outside the projection; a
+    // triangle spanning a few columns gets the whole test everywhere (the same cells: the placement only
+    // skips tests whose outcome it knows).
+    let columns = (last[u] - first[u] + 1) * (last[v] - first[v] + 1);
+    let inside = (columns > FEW_COLUMNS).then(|| FootprintTest::new(&corners, n[d].signum(), u, v));
+    let tester = CellTester::new(t, d, lo, hi);
+    let t0 = corners[0];
+    for iu in first[u]..=last[u] {
+        // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
+        let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
+        let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
+        let Some(row) = tester.row(f64::from(iu) + 0.5) else { continue };
+        for iv in first[v]..=last[v] {
+            let test = inside.as_ref().map_or(Test::Full, |inside| inside.place(iu, iv));
             if test == Test::Outside {
                 continue;
             }
             // Extent of the plane along the dominant axis over this cell's footprint.
-            let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
             let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
             let mut dlo = f64::INFINITY;
             let mut dhi = f64::NEG_INFINITY;
-            for cu in us {
+            for u_term in u_terms {
                 for cv in vs {
                     // n · (p − t0) = 0 solved for the dominant coordinate.
-                    let pd = t[0][d] - (n[u] * (cu - t[0][u]) + n[v] * (cv - t[0][v])) / n[d];
+                    let pd = t0[d] - (u_term + n[v] * (cv - t0[v])) / n[d];
                     dlo = dlo.min(pd);
                     dhi = dhi.max(pd);
                 }
             }
             let (dlo, dhi) = (dlo.max(lo[d]), dhi.min(hi[d]));
-            for id in cell_of(d, dlo)..=last_cell_of(d, dlo, dhi) {
-                let mut c = [0u32; 3];
-                c[u] = iu;
-                c[v] = iv;
-                c[d] = id;
-                emit(c, test);
+            let ids = cell_of(d, dlo)..=last_cell_of(d, dlo, dhi);
+            if ids.is_empty() {
+                continue;
+            }
+            let Some(column) = tester.column(&row, f64::from(iv) + 0.5, test == Test::Full) else { continue };
+            for id in ids {
+                if column.overlaps(f64::from(id) + 0.5) {
+                    let mut c = [0u32; 3];
+                    (c[u], c[v], c[d]) = (iu, iv, id);
+                    push(c);
+                }
             }
         }
     }
 }
 
+/// The cell one step along a fixed direction from the cells of a triangle.
+struct Neighbour {
+    step: [i32; 3],
+    /// The difference of the linear indices.
+    delta: isize,
+}
+
+impl Neighbour {
+    fn new(spec: &GridSpec, step: [i32; 3]) -> Self {
+        let [_, ny, nz] = spec.dims.map(|n| n as isize);
+        Self { step, delta: (step[0] as isize * ny + step[1] as isize) * nz + step[2] as isize }
+    }
+
+    /// Whether the neighbour of cell `c` (at linear index `index`) exists and is filled.
+    #[inline]
+    fn filled(&self, spec: &GridSpec, fill: &BitGrid, c: [u32; 3], index: usize) -> bool {
+        // Below zero, the cell wraps to a huge number: outside the grid too.
+        (0..3).all(|a| ((c[a] as i32 + self.step[a]) as u32) < spec.dims[a])
+            && fill.get(index.wrapping_add_signed(self.delta))
+    }
+}
+
 /// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
+// Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
+// `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
+#[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let pairs: Vec<u64> = (0..tris.len())
+    let parts: Vec<Vec<u64>> = (0..tris.len())
         .into_par_iter()
         .fold(Vec::new, |mut out, tri| {
             overlaps(spec, tris, tri, fill, &mut out);
             out
         })
-        .reduce(Vec::new, |mut a, mut b| {
-            a.append(&mut b);
-            a
-        });
-    // The fold and reduce keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
-    let pairs = radix::sort_by_key(pairs, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
+        .collect();
+    // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
+    let pairs = radix::sort_parts_by_key(parts, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
     // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
-    let mut shell = Shell { offsets: vec![0], tris: Vec::with_capacity(pairs.len()), ..Shell::default() };
+    let mut shell = Shell {
+        cells: Vec::with_capacity(pairs.len()),
+        offsets: Vec::with_capacity(pairs.len() + 1),
+        tris: Vec::with_capacity(pairs.len()),
+        thin: Vec::with_capacity(pairs.len()),
+    };
+    shell.offsets.push(0);
     for p in pairs {
         let (cell, tri, thin) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
         match shell.cells.last() {
@@ -234,6 +278,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::BoxTester;
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
@@ -255,7 +300,8 @@ mod tests {
                 2
             };
             let (u, v) = ((d + 1) % 3, (d + 2) % 3);
-            let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&t, n[d].signum(), u, v));
+            let corners = t.map(|w| w.to_array());
+            let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&corners, n[d].signum(), u, v));
             for (iu, iv, id) in (0..12).flat_map(|a| (0..12).flat_map(move |b| (0..12).map(move |c| (a, b, c)))) {
                 let mut c = DVec3::ZERO;
                 (c[u], c[v], c[d]) = (f64::from(iu) + 0.5, f64::from(iv) + 0.5, f64::from(id) + 0.5);
@@ -274,6 +320,26 @@ mod tests {
             }
         }
         assert!(inside_cells > 10_000 && outside_cells > 10_000, "{inside_cells} inside, {outside_cells} outside");
+    }
+
+    #[test]
+    fn extents_ending_on_a_boundary_stop_before_it() {
+        assert_eq!([cell_of(-2.0, 10), cell_of(3.7, 10), cell_of(10.0, 10), cell_of(f64::NAN, 10)], [0, 3, 9, 0]);
+        let cases = [
+            ((0.2, 3.0), 2),      // ends on the boundary of cell 3: does not reach it
+            ((0.2, 3.5), 3),      // ends inside cell 3
+            ((3.0, 3.0), 3),      // a point on the boundary: the cell above it
+            ((-5.0, 0.0), 0),     // ends on the grid's lower face
+            ((0.5, 10.0), 9),     // ends on the grid's upper face
+            ((0.5, 12.0), 9),     // beyond the grid
+            ((-9.0, -3.0), 0),    // wholly below it
+            ((0.0, f64::NAN), 0), // no extent
+            ((0.0, 1e300), 9),    // whole, far beyond the grid
+            ((0.0, f64::INFINITY), 9),
+        ];
+        for ((from, to), last) in cases {
+            assert_eq!(last_cell_of(from, to, 10), last, "[{from}, {to}]");
+        }
     }
 
     #[test]

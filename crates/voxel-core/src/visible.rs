@@ -9,6 +9,9 @@ use crate::grid::{BitGrid, GridSpec};
 const COLUMNS_PER_TASK: usize = 256;
 
 /// Solid cells with an empty face neighbour (the grid's outside counts as empty), ascending.
+// Out of line (called once per voxelization) so that an instruction profile can split the passes after it
+// (`valgrind --tool=callgrind --dump-after=voxel_core::visible::visible_cells`).
+#[inline(never)]
 pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
     let [nx, ny, nz] = spec.dims.map(|d| d as usize);
     let columns = nx * ny;
