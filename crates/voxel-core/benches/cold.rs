@@ -1,6 +1,6 @@
 //! `cargo bench -p voxel-core --bench cold`: what a fresh process pays before its first voxelization is as
-//! fast as the next ones (issue 13: "thread-pool start, first-touch of big allocations"), with the allocator
-//! of the command line (`examples/voxelize.rs`: mimalloc). The bench starts itself once per sample (medians
+//! fast as the next ones (issue 13: "thread-pool start, first-touch of big allocations"), with the system
+//! allocator, as the command line. The bench starts itself once per sample (medians
 //! of 7) and reports the thread pool's start, the first voxelization, the warm median of the same soup again
 //! (its part analysis cached) and of soups the process has not seen (what a fresh process's first
 //! voxelization does too), and the overhead: pool start + first − warm of a new soup (the pool's threads, the
@@ -22,10 +22,6 @@ mod cpu;
 mod timing;
 
 use timing::{Timing, measure, measure_each, median, options};
-
-/// The command line's allocator (see `examples/voxelize.rs`).
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 /// Fresh processes per model in the cold table.
 const COLD_SAMPLES: usize = 7;
