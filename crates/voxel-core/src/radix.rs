@@ -1,9 +1,47 @@
-//! A stable least-significant-digit radix sort by a small integer key: two or three passes over the list
+//! A stable least-significant-digit radix sort by a small integer key: one to three passes over the list
 //! where a comparison sort takes log n, for the shell's (cell, triangle) overlaps, the fill's column crossings
 //! and the colour count.
 
 /// Bits of the key sorted per pass.
 const DIGIT_BITS: u32 = 11;
+
+/// Bytes of the first segment of a [`Segments`] list, and of the largest.
+const SEGMENT_BYTES: [usize; 2] = [4 << 10, 1 << 20];
+
+/// A list that grows by segments, each twice the size of the one before (up to a limit), for the parallel
+/// tasks that collect what is sorted afterwards: growing never moves what is already in (a `Vec` doubling
+/// copies its items into fresh memory, so that the pages touched add up to about twice the list's), and the
+/// segments are the parts [`sort_parts_by_key`] reads.
+#[derive(Debug)]
+pub(crate) struct Segments<T>(Vec<Vec<T>>);
+
+impl<T> Default for Segments<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
+impl<T> Segments<T> {
+    /// Appends `item`.
+    #[inline]
+    pub fn push(&mut self, item: T) {
+        match self.0.last_mut() {
+            Some(last) if last.len() < last.capacity() => last.push(item),
+            last => {
+                let bytes =
+                    last.map_or(SEGMENT_BYTES[0], |last| (2 * last.len() * size_of::<T>()).min(SEGMENT_BYTES[1]));
+                let mut segment = Vec::with_capacity(bytes.div_ceil(size_of::<T>()));
+                segment.push(item);
+                self.0.push(segment);
+            }
+        }
+    }
+
+    /// The segments of every list of `lists`, in order.
+    pub fn concat(lists: Vec<Self>) -> Vec<Vec<T>> {
+        lists.into_iter().flat_map(|list| list.0).collect()
+    }
+}
 
 /// Sorts `items` by `key(item)`, which must be below 2^`bits`, keeping the order of items with equal keys.
 pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
@@ -13,34 +51,59 @@ pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl
 /// [`sort_by_key`] of the concatenation of `parts` (the lists of parallel tasks), without concatenating them
 /// first: the first pass reads the parts.
 pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
-    let passes = bits.div_ceil(DIGIT_BITS);
-    if passes == 0 {
-        return parts.concat();
-    }
-    let mask = (1u32 << DIGIT_BITS) - 1;
-    let key = &key;
-    let digit = |pass: u32| move |item: &T| (key(item) >> (pass * DIGIT_BITS) & mask) as usize;
-    let len = parts.iter().map(Vec::len).sum();
-    let mut items = vec![T::default(); len];
-    counting_pass(parts.iter().flatten(), &mut items, digit(0));
-    drop(parts);
-    if passes > 1 {
-        let mut sorted = vec![T::default(); len];
-        for pass in 1..passes {
-            counting_pass(items.iter(), &mut sorted, digit(pass));
-            std::mem::swap(&mut items, &mut sorted);
-        }
-    }
-    items
+    let mut sorted = vec![T::default(); parts.iter().map(Vec::len).sum()];
+    sort_parts_into(parts, bits, key, |at, item| sorted[at] = item);
+    sorted
 }
 
-/// One stable counting sort of `items` by `digit` (below 2^`DIGIT_BITS`) into `sorted`.
+/// [`sort_parts_by_key`] without the sorted list: its last pass hands each item to `place` with its position in
+/// the sorted order (in no particular order of positions), for a caller that splits the items into lists of
+/// their fields.
+///
+/// The memory a fresh process touches is what it pays for (a page fault per 4 KiB): a key whose counts take no
+/// more room than the list (the fill's columns) is sorted in one pass, straight from the parts to `place`;
+/// otherwise the first pass writes one list, a third pass (32-bit keys) reuses the largest part's pages for
+/// a second, and the last pass reads it.
+pub(crate) fn sort_parts_into<T: Copy + Default>(
+    parts: Vec<Vec<T>>,
+    bits: u32,
+    key: impl Fn(&T) -> u32,
+    place: impl FnMut(usize, T),
+) {
+    let len: usize = parts.iter().map(Vec::len).sum();
+    let counts_bytes = (size_of::<usize>() as u64) << bits;
+    let digit_bits = if counts_bytes <= (len * size_of::<T>()) as u64 { bits } else { DIGIT_BITS };
+    let passes = bits.div_ceil(digit_bits.max(1)).max(1);
+    let mask = ((1u64 << digit_bits) - 1) as u32;
+    let key = &key;
+    let digit = |pass: u32| move |item: &T| (key(item) >> (pass * digit_bits) & mask) as usize;
+    if passes == 1 {
+        return counting_pass(parts.iter().flatten(), digit_bits, digit(0), place);
+    }
+    let mut items = vec![T::default(); len];
+    counting_pass(parts.iter().flatten(), digit_bits, digit(0), |at, item| items[at] = item);
+    let mut spare = parts.into_iter().max_by_key(Vec::capacity).unwrap_or_default();
+    if passes > 2 {
+        spare.clear();
+        spare.resize(len, T::default());
+    }
+    for pass in 1..passes - 1 {
+        counting_pass(items.iter(), digit_bits, digit(pass), |at, item| spare[at] = item);
+        std::mem::swap(&mut items, &mut spare);
+    }
+    drop(spare);
+    counting_pass(items.iter(), digit_bits, digit(passes - 1), place);
+}
+
+/// One stable counting sort of `items` by `digit` (below 2^`digit_bits`): each item goes to `place` with its
+/// position in the sorted order.
 fn counting_pass<'a, T: Copy + 'a>(
     items: impl Iterator<Item = &'a T> + Clone,
-    sorted: &mut [T],
+    digit_bits: u32,
     digit: impl Fn(&T) -> usize,
+    mut place: impl FnMut(usize, T),
 ) {
-    let mut starts = vec![0usize; 1 << DIGIT_BITS];
+    let mut starts = vec![0usize; 1 << digit_bits];
     for item in items.clone() {
         starts[digit(item)] += 1;
     }
@@ -50,7 +113,7 @@ fn counting_pass<'a, T: Copy + 'a>(
     }
     for item in items {
         let d = digit(item);
-        sorted[starts[d]] = *item;
+        place(starts[d], *item);
         starts[d] += 1;
     }
 }
@@ -77,6 +140,19 @@ mod tests {
         let mut expected = small.clone();
         expected.sort_by_key(|i| i.0);
         assert_eq!(sort_by_key(small, 11, |i| i.0), expected);
+        // Counts of 2^12 words take less room than 10,000 items: one pass with a 12-bit digit.
+        let many: Vec<(u32, usize)> = (0..10_000).map(|i| ((i * 7919 % 4096) as u32, i)).collect();
+        let mut expected = many.clone();
+        expected.sort_by_key(|i| i.0);
+        assert_eq!(sort_parts_by_key(vec![many[..3000].to_vec(), many[3000..].to_vec()], 12, |i| i.0), expected);
+        assert_eq!(sort_by_key(vec![(0u32, 'a'), (0, 'b')], 0, |i| i.0), [(0, 'a'), (0, 'b')]);
+        let mut segments = (Segments::default(), Segments::default());
+        for (k, &item) in many.iter().enumerate() {
+            if k < 7000 { segments.0.push(item) } else { segments.1.push(item) }
+        }
+        let parts = Segments::concat(vec![segments.0, segments.1]);
+        assert_eq!(parts.iter().map(Vec::len).collect::<Vec<_>>(), [256, 512, 1024, 2048, 3160, 256, 512, 1024, 1208]);
+        assert_eq!(parts.concat(), many);
         assert_eq!((bits_for(1), bits_for(2), bits_for(2048), bits_for(2049)), (0, 1, 11, 12));
     }
 }
