@@ -51,48 +51,87 @@ pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl
 /// [`sort_by_key`] of the concatenation of `parts` (the lists of parallel tasks), without concatenating them
 /// first: the first pass reads the parts.
 pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
-    let mut sorted = vec![T::default(); parts.iter().map(Vec::len).sum()];
-    sort_parts_into(parts, bits, key, |at, item| sorted[at] = item);
+    let len = parts.iter().map(Vec::len).sum();
+    let digits = Digits::new(len * size_of::<T>(), bits);
+    let last = digits.passes - 1;
+    if last == 0 {
+        let mut sorted = vec![T::default(); len];
+        counting_pass(
+            parts.iter().flatten(),
+            digits.width,
+            |item| digits.of(key(item), 0),
+            |at, item| sorted[at] = item,
+        );
+        return sorted;
+    }
+    // The last pass writes to the spare list: no third list.
+    let (items, mut sorted) = leading_passes(parts, &digits, &key);
+    sorted.clear();
+    sorted.resize(len, T::default());
+    counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), |at, item| sorted[at] = item);
     sorted
 }
 
 /// [`sort_parts_by_key`] without the sorted list: its last pass hands each item to `place` with its position in
 /// the sorted order (in no particular order of positions), for a caller that splits the items into lists of
 /// their fields.
-///
-/// The memory a fresh process touches is what it pays for (a page fault per 4 KiB): a key whose counts take no
-/// more room than the list (the fill's columns) is sorted in one pass, straight from the parts to `place`;
-/// otherwise the first pass writes one list, a third pass (32-bit keys) reuses the largest part's pages for
-/// a second, and the last pass reads it.
 pub(crate) fn sort_parts_into<T: Copy + Default>(
     parts: Vec<Vec<T>>,
     bits: u32,
     key: impl Fn(&T) -> u32,
     place: impl FnMut(usize, T),
 ) {
-    let len: usize = parts.iter().map(Vec::len).sum();
-    let counts_bytes = (size_of::<usize>() as u64) << bits;
-    let digit_bits = if counts_bytes <= (len * size_of::<T>()) as u64 { bits } else { DIGIT_BITS };
-    let passes = bits.div_ceil(digit_bits.max(1)).max(1);
-    let mask = ((1u64 << digit_bits) - 1) as u32;
-    let key = &key;
-    let digit = |pass: u32| move |item: &T| (key(item) >> (pass * digit_bits) & mask) as usize;
-    if passes == 1 {
-        return counting_pass(parts.iter().flatten(), digit_bits, digit(0), place);
+    let digits = Digits::new(parts.iter().map(Vec::len).sum::<usize>() * size_of::<T>(), bits);
+    let last = digits.passes - 1;
+    if last == 0 {
+        return counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), place);
     }
+    let (items, spare) = leading_passes(parts, &digits, &key);
+    drop(spare);
+    counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), place);
+}
+
+/// The digits of a sort, chosen for the memory a fresh process touches (a page fault per 4 KiB): a key whose
+/// counts take no more room than the list (the fill's columns) is one digit, so one pass writes the sorted
+/// order straight from the parts; otherwise digits of [`DIGIT_BITS`].
+struct Digits {
+    width: u32,
+    passes: u32,
+}
+
+impl Digits {
+    /// The digits of `bits`-bit keys of a list of `bytes`.
+    fn new(bytes: usize, bits: u32) -> Self {
+        let counts_bytes = (size_of::<usize>() as u64) << bits;
+        let width = if counts_bytes <= bytes as u64 { bits } else { DIGIT_BITS };
+        Self { width, passes: bits.div_ceil(width.max(1)).max(1) }
+    }
+
+    /// Digit `pass` of `key`.
+    #[inline]
+    fn of(&self, key: u32, pass: u32) -> usize {
+        (u64::from(key) >> (pass * self.width) & ((1u64 << self.width) - 1)) as usize
+    }
+}
+
+/// Every pass of a sort in several but the last: the items in that order, and a spare list for the last pass
+/// (the largest part's memory, or the first pass's when a third pass reused that).
+fn leading_passes<T: Copy + Default>(
+    parts: Vec<Vec<T>>,
+    digits: &Digits,
+    key: &impl Fn(&T) -> u32,
+) -> (Vec<T>, Vec<T>) {
+    let len = parts.iter().map(Vec::len).sum();
     let mut items = vec![T::default(); len];
-    counting_pass(parts.iter().flatten(), digit_bits, digit(0), |at, item| items[at] = item);
+    counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), |at, item| items[at] = item);
     let mut spare = parts.into_iter().max_by_key(Vec::capacity).unwrap_or_default();
-    if passes > 2 {
+    for pass in 1..digits.passes - 1 {
         spare.clear();
         spare.resize(len, T::default());
-    }
-    for pass in 1..passes - 1 {
-        counting_pass(items.iter(), digit_bits, digit(pass), |at, item| spare[at] = item);
+        counting_pass(items.iter(), digits.width, |item| digits.of(key(item), pass), |at, item| spare[at] = item);
         std::mem::swap(&mut items, &mut spare);
     }
-    drop(spare);
-    counting_pass(items.iter(), digit_bits, digit(passes - 1), place);
+    (items, spare)
 }
 
 /// One stable counting sort of `items` by `digit` (below 2^`digit_bits`): each item goes to `place` with its
