@@ -6,7 +6,7 @@
 const DIGIT_BITS: u32 = 11;
 
 /// Bytes of the first segment of a [`Segments`] list, and of the largest.
-const SEGMENT_BYTES: [usize; 2] = [4 << 10, 1 << 20];
+const SEGMENT_BYTES: [usize; 2] = [512, 1 << 20];
 
 /// A list that grows by segments, each twice the size of the one before (up to a limit), for the parallel
 /// tasks that collect what is sorted afterwards: growing never moves what is already in (a `Vec` doubling
@@ -190,7 +190,10 @@ mod tests {
             if k < 7000 { segments.0.push(item) } else { segments.1.push(item) }
         }
         let parts = Segments::concat(vec![segments.0, segments.1]);
-        assert_eq!(parts.iter().map(Vec::len).collect::<Vec<_>>(), [256, 512, 1024, 2048, 3160, 256, 512, 1024, 1208]);
+        assert_eq!(
+            parts.iter().map(Vec::len).collect::<Vec<_>>(),
+            [32, 64, 128, 256, 512, 1024, 2048, 2936, 32, 64, 128, 256, 512, 1024, 984]
+        );
         assert_eq!(parts.concat(), many);
         assert_eq!((bits_for(1), bits_for(2), bits_for(2048), bits_for(2049)), (0, 1, 11, 12));
     }
