@@ -4,7 +4,8 @@
 //! of 7) and reports the thread pool's start, the first voxelization, the warm median of the same soup again
 //! (its part analysis cached) and of soups the process has not seen (what a fresh process's first
 //! voxelization does too), and the overhead: pool start + first − warm of a new soup (the pool's threads, the
-//! first touch of the allocations and of the code), each as wall time (CPU time).
+//! first touch of the allocations and of the code), each as wall time (CPU time), and the minor page faults of
+//! the first voxelization (each a first touch of a 4 KiB page).
 
 use std::path::Path;
 use std::process::Command;
@@ -44,35 +45,49 @@ fn scaled(soup: &TriangleSoup, k: i32) -> TriangleSoup {
     scaled
 }
 
+/// Minor page faults of this process so far (Linux: field 10 of /proc/self/stat; 0 elsewhere).
+fn minor_faults() -> u64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // The fields after the command name, which is in parentheses and may hold spaces: minflt is the eighth.
+    let fields = stat.rfind(')').map_or("", |end| &stat[end + 1..]);
+    fields.split_whitespace().nth(7).and_then(|f| f.parse().ok()).unwrap_or(0)
+}
+
 /// In a fresh process: the thread pool's start, the first voxelization, the median of the next five and that
 /// of five voxelizations of soups not seen before (copies scaled by powers of two), in ms of wall time, then
-/// the same in CPU time.
+/// the same in CPU time, then the first voxelization's minor page faults.
 fn cold_child(file: &Path, r: Option<u32>) {
     let soup = load_file(file).expect("load");
     let options = options(r, false);
     let (cpu_start, started) = (cpu::cpu_ns().unwrap_or(0), Instant::now());
     rayon::join(|| (), || ());
     let (pool_cpu, pool) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3);
+    let faults = minor_faults();
     voxelize(&soup, &options).expect("voxelize");
+    let faults = minor_faults() - faults;
     let (first_cpu, first) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3 - pool);
     let (warm, _) = measure(&soup, &options, 5);
     let copies: Vec<TriangleSoup> = (1..=5).map(|k| scaled(&soup, k)).collect();
     let (unseen, _) = measure_each(&soup, &copies.iter().collect::<Vec<_>>(), &options);
     let ms = |a: u64, b: u64| b.saturating_sub(a) as f64 / 1e6;
     let (pool_cpu_ms, first_cpu_ms) = (ms(cpu_start, pool_cpu), ms(pool_cpu, first_cpu));
-    println!("{pool} {first} {} {} {pool_cpu_ms} {first_cpu_ms} {} {}", warm.wall, unseen.wall, warm.cpu, unseen.cpu);
+    let (warm_cpu, unseen_cpu) = (warm.cpu, unseen.cpu);
+    println!(
+        "{pool} {first} {} {} {pool_cpu_ms} {first_cpu_ms} {warm_cpu} {unseen_cpu} {faults}",
+        warm.wall, unseen.wall
+    );
 }
 
 /// The cold table: medians over fresh processes.
 fn print_cold(dir: &Path) {
     println!(
-        "| model | grid | pool start ms | first voxelization ms | warm ms, same soup | warm ms, new soup | cold overhead ms |"
+        "| model | grid | pool start ms | first voxelization ms | warm ms, same soup | warm ms, new soup | cold overhead ms | first voxelization's minor faults |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|");
     let exe = std::env::current_exe().expect("the bench's path");
     for (model, r) in COLD_MODELS {
         let file = dir.join(model);
-        let samples: Vec<[f64; 8]> = (0..COLD_SAMPLES)
+        let samples: Vec<[f64; 9]> = (0..COLD_SAMPLES)
             .map(|_| {
                 let mut child = Command::new(&exe);
                 child.arg("cold-child").arg(&file).arg(r.map_or_else(|| "default".into(), |r| r.to_string()));
@@ -91,7 +106,14 @@ fn print_cold(dir: &Path) {
         let overhead = |k: usize| median(samples.iter().map(|s| s[k] + s[k + 1] - s[k + 3]).collect());
         let overhead = Timing { wall: overhead(0), cpu: overhead(4) };
         let grid = r.map_or_else(|| "default".into(), |r| format!("R={r}"));
-        println!("| {model} | {grid} | {} | {} | {} | {} | {overhead} |", cell(0), cell(1), cell(2), cell(3));
+        let faults = median(samples.iter().map(|s| s[8]).collect());
+        println!(
+            "| {model} | {grid} | {} | {} | {} | {} | {overhead} | {faults} |",
+            cell(0),
+            cell(1),
+            cell(2),
+            cell(3)
+        );
     }
 }
 

@@ -34,7 +34,7 @@ use crate::bvh::TriangleBvh;
 use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, has_projected_area};
 use crate::grid::{BitGrid, GridSpec};
 use crate::orient::{Role, closed_parts, winding_roles};
-use crate::radix;
+use crate::radix::{self, Segments};
 use crate::soup::TriangleSoup;
 use crate::voxelize::{FillMode, Method};
 
@@ -164,11 +164,11 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
     let per_task = triangles_per_task(tris.len());
-    let parts: Vec<Vec<Crossing>> = tris
+    let lists: Vec<Segments<Crossing>> = tris
         .par_chunks(per_task)
         .enumerate()
         .map(|(chunk_index, chunk)| {
-            let mut out = Vec::new();
+            let mut out = Segments::default();
             for (k, t) in chunk.iter().enumerate() {
                 let triangle = (chunk_index * per_task + k) as u32;
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
@@ -191,7 +191,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
     // Made triangle-major: a stable sort by column keeps the triangles' order, then each column's few
     // crossings are sorted by depth.
     let count = spec.dims[0] as usize * ny as usize;
-    let mut crossings = radix::sort_parts_by_key(parts, radix::bits_for(count), |c| c.column);
+    let mut crossings = radix::sort_parts_by_key(Segments::concat(lists), radix::bits_for(count), |c| c.column);
     crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
     Columns::from_sorted(count, crossings)
 }

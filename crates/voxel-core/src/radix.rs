@@ -1,9 +1,47 @@
-//! A stable least-significant-digit radix sort by a small integer key: two or three passes over the list
+//! A stable least-significant-digit radix sort by a small integer key: one to three passes over the list
 //! where a comparison sort takes log n, for the shell's (cell, triangle) overlaps, the fill's column crossings
 //! and the colour count.
 
 /// Bits of the key sorted per pass.
 const DIGIT_BITS: u32 = 11;
+
+/// Bytes of the first segment of a [`Segments`] list, and of the largest.
+const SEGMENT_BYTES: [usize; 2] = [512, 1 << 20];
+
+/// A list that grows by segments, each twice the size of the one before (up to a limit), for the parallel
+/// tasks that collect what is sorted afterwards: growing never moves what is already in (a `Vec` doubling
+/// copies its items into fresh memory, so that the pages touched add up to about twice the list's), and the
+/// segments are the parts [`sort_parts_by_key`] reads.
+#[derive(Debug)]
+pub(crate) struct Segments<T>(Vec<Vec<T>>);
+
+impl<T> Default for Segments<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
+impl<T> Segments<T> {
+    /// Appends `item`.
+    #[inline]
+    pub fn push(&mut self, item: T) {
+        match self.0.last_mut() {
+            Some(last) if last.len() < last.capacity() => last.push(item),
+            last => {
+                let bytes =
+                    last.map_or(SEGMENT_BYTES[0], |last| (2 * last.len() * size_of::<T>()).min(SEGMENT_BYTES[1]));
+                let mut segment = Vec::with_capacity(bytes.div_ceil(size_of::<T>()));
+                segment.push(item);
+                self.0.push(segment);
+            }
+        }
+    }
+
+    /// The segments of every list of `lists`, in order.
+    pub fn concat(lists: Vec<Self>) -> Vec<Vec<T>> {
+        lists.into_iter().flat_map(|list| list.0).collect()
+    }
+}
 
 /// Sorts `items` by `key(item)`, which must be below 2^`bits`, keeping the order of items with equal keys.
 pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
@@ -13,34 +51,98 @@ pub(crate) fn sort_by_key<T: Copy + Default>(items: Vec<T>, bits: u32, key: impl
 /// [`sort_by_key`] of the concatenation of `parts` (the lists of parallel tasks), without concatenating them
 /// first: the first pass reads the parts.
 pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32, key: impl Fn(&T) -> u32) -> Vec<T> {
-    let passes = bits.div_ceil(DIGIT_BITS);
-    if passes == 0 {
-        return parts.concat();
-    }
-    let mask = (1u32 << DIGIT_BITS) - 1;
-    let key = &key;
-    let digit = |pass: u32| move |item: &T| (key(item) >> (pass * DIGIT_BITS) & mask) as usize;
     let len = parts.iter().map(Vec::len).sum();
-    let mut items = vec![T::default(); len];
-    counting_pass(parts.iter().flatten(), &mut items, digit(0));
-    drop(parts);
-    if passes > 1 {
+    let digits = Digits::new(len * size_of::<T>(), bits);
+    let last = digits.passes - 1;
+    if last == 0 {
         let mut sorted = vec![T::default(); len];
-        for pass in 1..passes {
-            counting_pass(items.iter(), &mut sorted, digit(pass));
-            std::mem::swap(&mut items, &mut sorted);
-        }
+        counting_pass(
+            parts.iter().flatten(),
+            digits.width,
+            |item| digits.of(key(item), 0),
+            |at, item| sorted[at] = item,
+        );
+        return sorted;
     }
-    items
+    // The last pass writes to the spare list: no third list.
+    let (items, mut sorted) = leading_passes(parts, &digits, &key);
+    sorted.clear();
+    sorted.resize(len, T::default());
+    counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), |at, item| sorted[at] = item);
+    sorted
 }
 
-/// One stable counting sort of `items` by `digit` (below 2^`DIGIT_BITS`) into `sorted`.
+/// [`sort_parts_by_key`] without the sorted list: its last pass hands each item to `place` with its position in
+/// the sorted order (in no particular order of positions), for a caller that splits the items into lists of
+/// their fields.
+pub(crate) fn sort_parts_into<T: Copy + Default>(
+    parts: Vec<Vec<T>>,
+    bits: u32,
+    key: impl Fn(&T) -> u32,
+    place: impl FnMut(usize, T),
+) {
+    let digits = Digits::new(parts.iter().map(Vec::len).sum::<usize>() * size_of::<T>(), bits);
+    let last = digits.passes - 1;
+    if last == 0 {
+        return counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), place);
+    }
+    let (items, spare) = leading_passes(parts, &digits, &key);
+    drop(spare);
+    counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), place);
+}
+
+/// The digits of a sort, chosen for the memory a fresh process touches (a page fault per 4 KiB): a key whose
+/// counts take no more room than the list (the fill's columns) is one digit, so one pass writes the sorted
+/// order straight from the parts; otherwise digits of [`DIGIT_BITS`].
+struct Digits {
+    width: u32,
+    passes: u32,
+}
+
+impl Digits {
+    /// The digits of `bits`-bit keys of a list of `bytes`.
+    fn new(bytes: usize, bits: u32) -> Self {
+        let counts_bytes = (size_of::<usize>() as u64) << bits;
+        let width = if counts_bytes <= bytes as u64 { bits } else { DIGIT_BITS };
+        Self { width, passes: bits.div_ceil(width.max(1)).max(1) }
+    }
+
+    /// Digit `pass` of `key`.
+    #[inline]
+    fn of(&self, key: u32, pass: u32) -> usize {
+        (u64::from(key) >> (pass * self.width) & ((1u64 << self.width) - 1)) as usize
+    }
+}
+
+/// Every pass of a sort in several but the last: the items in that order, and a spare list for the last pass
+/// (the largest part's memory, or the first pass's when a third pass reused that).
+fn leading_passes<T: Copy + Default>(
+    parts: Vec<Vec<T>>,
+    digits: &Digits,
+    key: &impl Fn(&T) -> u32,
+) -> (Vec<T>, Vec<T>) {
+    let len = parts.iter().map(Vec::len).sum();
+    let mut items = vec![T::default(); len];
+    counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), |at, item| items[at] = item);
+    let mut spare = parts.into_iter().max_by_key(Vec::capacity).unwrap_or_default();
+    for pass in 1..digits.passes - 1 {
+        spare.clear();
+        spare.resize(len, T::default());
+        counting_pass(items.iter(), digits.width, |item| digits.of(key(item), pass), |at, item| spare[at] = item);
+        std::mem::swap(&mut items, &mut spare);
+    }
+    (items, spare)
+}
+
+/// One stable counting sort of `items` by `digit` (below 2^`digit_bits`): each item goes to `place` with its
+/// position in the sorted order.
 fn counting_pass<'a, T: Copy + 'a>(
     items: impl Iterator<Item = &'a T> + Clone,
-    sorted: &mut [T],
+    digit_bits: u32,
     digit: impl Fn(&T) -> usize,
+    mut place: impl FnMut(usize, T),
 ) {
-    let mut starts = vec![0usize; 1 << DIGIT_BITS];
+    let mut starts = vec![0usize; 1 << digit_bits];
     for item in items.clone() {
         starts[digit(item)] += 1;
     }
@@ -50,7 +152,7 @@ fn counting_pass<'a, T: Copy + 'a>(
     }
     for item in items {
         let d = digit(item);
-        sorted[starts[d]] = *item;
+        place(starts[d], *item);
         starts[d] += 1;
     }
 }
@@ -77,6 +179,22 @@ mod tests {
         let mut expected = small.clone();
         expected.sort_by_key(|i| i.0);
         assert_eq!(sort_by_key(small, 11, |i| i.0), expected);
+        // Counts of 2^12 words take less room than 10,000 items: one pass with a 12-bit digit.
+        let many: Vec<(u32, usize)> = (0..10_000).map(|i| ((i * 7919 % 4096) as u32, i)).collect();
+        let mut expected = many.clone();
+        expected.sort_by_key(|i| i.0);
+        assert_eq!(sort_parts_by_key(vec![many[..3000].to_vec(), many[3000..].to_vec()], 12, |i| i.0), expected);
+        assert_eq!(sort_by_key(vec![(0u32, 'a'), (0, 'b')], 0, |i| i.0), [(0, 'a'), (0, 'b')]);
+        let mut segments = (Segments::default(), Segments::default());
+        for (k, &item) in many.iter().enumerate() {
+            if k < 7000 { segments.0.push(item) } else { segments.1.push(item) }
+        }
+        let parts = Segments::concat(vec![segments.0, segments.1]);
+        assert_eq!(
+            parts.iter().map(Vec::len).collect::<Vec<_>>(),
+            [32, 64, 128, 256, 512, 1024, 2048, 2936, 32, 64, 128, 256, 512, 1024, 984]
+        );
+        assert_eq!(parts.concat(), many);
         assert_eq!((bits_for(1), bits_for(2), bits_for(2048), bits_for(2049)), (0, 1, 11, 12));
     }
 }

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSpec};
-use crate::radix;
+use crate::radix::{self, Segments};
 
 mod cells;
 mod octree;
@@ -130,7 +130,7 @@ const FEW_COLUMNS: u32 = 9;
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
 /// them).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Vec<u64>) {
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Segments<u64>) {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
@@ -240,39 +240,42 @@ impl Neighbour {
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let parts: Vec<Vec<u64>> = (0..tris.len())
+    let lists: Vec<Segments<u64>> = (0..tris.len())
         .into_par_iter()
-        .fold(Vec::new, |mut out, tri| {
+        .fold(Segments::default, |mut out, tri| {
             overlaps(spec, tris, tri, fill, &mut out);
             out
         })
         .collect();
-    // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle).
-    let pairs = radix::sort_parts_by_key(parts, radix::bits_for(spec.cell_count()), |p| (p >> 32) as u32);
-    // Compressed rows: offsets[k]..offsets[k + 1] index the triangles of cells[k].
-    let mut shell = Shell {
-        cells: Vec::with_capacity(pairs.len()),
-        offsets: Vec::with_capacity(pairs.len() + 1),
-        tris: Vec::with_capacity(pairs.len()),
-        thin: Vec::with_capacity(pairs.len()),
-    };
-    shell.offsets.push(0);
-    for p in pairs {
-        let (cell, tri, thin) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
-        match shell.cells.last() {
-            Some(&last) if last == cell => *shell.thin.last_mut().expect("a cell has a flag") |= thin,
-            previous => {
-                if previous.is_some() {
-                    shell.offsets.push(shell.tris.len() as u32);
-                }
-                shell.cells.push(cell);
-                shell.thin.push(thin);
-            }
+    let parts = Segments::concat(lists);
+    // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle). The sort's last
+    // pass writes each overlap's fields to its position: the triangles are the compressed rows' already.
+    let len = parts.iter().map(Vec::len).sum();
+    let (mut cells, mut tris, mut thin) = (vec![0u32; len], vec![0u32; len], vec![false; len]);
+    radix::sort_parts_into(
+        parts,
+        radix::bits_for(spec.cell_count()),
+        |p| (p >> 32) as u32,
+        |at, p| {
+            (cells[at], tris[at], thin[at]) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
+        },
+    );
+    // Compressed rows: each run of equal cells becomes one cell, its flag the union of theirs, in place.
+    let mut offsets = Vec::new();
+    let mut count = 0;
+    for k in 0..len {
+        if count > 0 && cells[count - 1] == cells[k] {
+            thin[count - 1] |= thin[k];
+        } else {
+            offsets.push(k as u32);
+            (cells[count], thin[count]) = (cells[k], thin[k]);
+            count += 1;
         }
-        shell.tris.push(tri);
     }
-    shell.offsets.push(shell.tris.len() as u32);
-    shell
+    offsets.push(len as u32);
+    cells.truncate(count);
+    thin.truncate(count);
+    Shell { cells, offsets, tris, thin }
 }
 
 #[cfg(test)]
