@@ -15,7 +15,7 @@ pub fn srgb_to_linear(c: u8) -> f32 {
     TABLE[usize::from(c)]
 }
 
-/// Linear component → sRGB-encoded 8-bit: exactly [`linear_to_srgb_formula`] (the sRGB curve in f32 with
+/// Linear component → sRGB-encoded 8-bit: exactly `linear_to_srgb_formula` (the sRGB curve in f32 with
 /// `powf`, rounded), looked up instead of computed. The formula is non-decreasing in `c`, so its value is the
 /// number of the 255 thresholds `t₁ ≤ … ≤ t₂₅₅` (tₖ: the smallest f32 it maps to k or more) that are ≤ `c`.
 /// The f32s from 2⁻¹³ to 1 fall into 1,664 slices by the top 16 bits of their encoding (the exponent and 7
@@ -90,7 +90,7 @@ impl SrgbThresholds {
 
 /// Linear component → sRGB-encoded 8-bit by the sRGB curve (`powf`): the definition [`linear_to_srgb`]
 /// tabulates.
-pub fn linear_to_srgb_formula(c: f32) -> u8 {
+fn linear_to_srgb_formula(c: f32) -> u8 {
     let c = c.clamp(0.0, 1.0);
     let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0).round() as u8

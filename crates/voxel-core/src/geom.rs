@@ -45,7 +45,7 @@ pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
 
 /// Whether the triangle's projection on the XY plane has non-zero area (decided exactly).
 #[inline]
-pub fn has_projected_area(t: &GridTriangle) -> bool {
+pub(crate) fn has_projected_area(t: &GridTriangle) -> bool {
     let xy = |v: DVec3| Coord { x: v.x, y: v.y };
     orient2d(xy(t[0]), xy(t[1]), xy(t[2])) != 0.0
 }

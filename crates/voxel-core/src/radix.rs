@@ -66,7 +66,7 @@ pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32
     }
     // The last pass writes to the spare list: no third list.
     let (items, mut sorted) = leading_passes(parts, &digits, &key);
-    sorted.clear();
+    // Every position below `len` is written by the pass: only the length needs setting.
     sorted.resize(len, T::default());
     counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), |at, item| sorted[at] = item);
     sorted
@@ -126,7 +126,6 @@ fn leading_passes<T: Copy + Default>(
     counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), |at, item| items[at] = item);
     let mut spare = parts.into_iter().max_by_key(Vec::capacity).unwrap_or_default();
     for pass in 1..digits.passes - 1 {
-        spare.clear();
         spare.resize(len, T::default());
         counting_pass(items.iter(), digits.width, |item| digits.of(key(item), pass), |at, item| spare[at] = item);
         std::mem::swap(&mut items, &mut spare);

@@ -143,10 +143,9 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
     let hi = t[0].max(t[1]).max(t[2]).to_array();
     let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
     let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
-    let strides = [spec.dims[1] as usize * spec.dims[2] as usize, spec.dims[2] as usize, 1];
     let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
     let mut push = |c: [u32; 3]| {
-        let index = c[0] as usize * strides[0] + c[1] as usize * strides[1] + c[2] as usize;
+        let index = spec.index(c[0], c[1], c[2]);
         let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
         out.push(pack(index, tri, thin));
     };
@@ -229,9 +228,7 @@ impl Neighbour {
     /// Whether the neighbour of cell `c` (at linear index `index`) exists and is filled.
     #[inline]
     fn filled(&self, spec: &GridSpec, fill: &BitGrid, c: [u32; 3], index: usize) -> bool {
-        // Below zero, the cell wraps to a huge number: outside the grid too.
-        (0..3).all(|a| ((c[a] as i32 + self.step[a]) as u32) < spec.dims[a])
-            && fill.get(index.wrapping_add_signed(self.delta))
+        spec.step(c, self.step).is_some() && fill.get(index.wrapping_add_signed(self.delta))
     }
 }
 
