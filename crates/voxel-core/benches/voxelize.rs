@@ -60,14 +60,19 @@ fn median_ms(mut values: Vec<Duration>) -> f64 {
     values[values.len() / 2].as_secs_f64() * 1e3
 }
 
+/// The median fill, shell and colour pass times in ms.
+fn pass_medians<'a>(times: impl Iterator<Item = &'a PassTimes> + Clone) -> [f64; 3] {
+    let passes: [fn(&PassTimes) -> Duration; 3] = [|t| t.fill, |t| t.shell, |t| t.color];
+    passes.map(|pass| median_ms(times.clone().map(pass).collect()))
+}
+
 /// Prints one row per resolution: the median fill, shell and colour pass times of `runs` voxelizations.
 fn print_passes(name: &str, soup: &TriangleSoup, runs: usize) {
     for r in [64, 128] {
         let options = VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() };
         let timed: Vec<_> = (0..runs).map(|_| voxelize_timed(soup, &options).expect("voxelize")).collect();
         let visible = timed[0].0.stats.visible;
-        let passes: [fn(&PassTimes) -> Duration; 3] = [|t| t.fill, |t| t.shell, |t| t.color];
-        let [fill, shell, color] = passes.map(|pass| median_ms(timed.iter().map(|(_, t)| pass(t)).collect()));
+        let [fill, shell, color] = pass_medians(timed.iter().map(|(_, t)| t));
         println!(
             "| {name} | {} | {r} | {visible} | {fill:.2} | {shell:.2} | {color:.2} | {:.2} |",
             soup.triangle_count(),
@@ -172,8 +177,7 @@ fn main() {
         let times: Vec<PassTimes> =
             (0..n.parse().expect("N")).map(|_| voxelize_timed(&soup, &options).expect("voxelize").1).collect();
         if !times.is_empty() {
-            let passes: [fn(&PassTimes) -> Duration; 3] = [|t| t.fill, |t| t.shell, |t| t.color];
-            let [fill, shell, color] = passes.map(|pass| median_ms(times.iter().map(pass).collect()));
+            let [fill, shell, color] = pass_medians(times.iter());
             println!("{name} R={r}: fill {fill:.2} ms, shell {shell:.2} ms, colour {color:.2} ms (medians of {n})");
         }
         return;

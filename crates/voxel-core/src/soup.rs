@@ -128,9 +128,8 @@ impl Vertex {
 /// World-space triangles grouped into parts, with their materials.
 ///
 /// The corners are read with [`TriangleSoup::vertices`] and changed only through
-/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`] (or the importer's indexed push), so that
-/// what the soup keeps about its positions (the winding fill's closed parts, found once for every grid, and
-/// the corners' source vertices) never outlives them.
+/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`], so that what the soup keeps about its
+/// positions (the winding fill's closed parts, found once for every grid) never outlives them.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
     /// Materials referenced by parts.
@@ -141,12 +140,8 @@ pub struct TriangleSoup {
     vertices: Vec<Vertex>,
     /// The part of each triangle.
     pub triangle_parts: Vec<u32>,
-    /// The source vertex of each corner (corners made from one vertex share its position bit for bit) while
-    /// every corner was pushed with one ([`TriangleSoup::push_indexed_triangle`]); otherwise shorter than
-    /// `vertices` (emptied whenever the positions can change).
-    sources: Vec<u32>,
     /// The closed parts of `vertices`' positions, found when first needed; emptied whenever they can change.
-    closed_parts: OnceLock<SoupParts>,
+    closed_parts: OnceLock<Arc<SoupParts>>,
 }
 
 impl TriangleSoup {
@@ -164,29 +159,9 @@ impl TriangleSoup {
 
     /// Adds a triangle to part `part`.
     pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
-        self.sources.clear();
-        self.push(part, corners);
-    }
-
-    /// Adds a triangle to part `part` whose corners were made from the source vertices `sources` (numbers
-    /// the caller gives, the same only for corners at the same position), so that the part analysis welds
-    /// source vertices rather than corners. Once a triangle was pushed without them, they are not kept.
-    pub(crate) fn push_indexed_triangle(&mut self, part: u32, corners: [Vertex; 3], sources: [u32; 3]) {
-        if self.sources.len() == self.vertices.len() {
-            self.sources.extend_from_slice(&sources);
-        }
-        self.push(part, corners);
-    }
-
-    fn push(&mut self, part: u32, corners: [Vertex; 3]) {
         self.closed_parts.take();
         self.vertices.extend_from_slice(&corners);
         self.triangle_parts.push(part);
-    }
-
-    /// Each corner's source vertex, when every corner has one.
-    pub(crate) fn sources(&self) -> Option<&[u32]> {
-        (self.sources.len() == self.vertices.len()).then_some(&self.sources[..])
     }
 
     /// The corners, three per triangle.
@@ -197,13 +172,12 @@ impl TriangleSoup {
     /// The corners, to change (a new pose, an edited mesh): forgets what the soup knew about its positions.
     pub fn vertices_mut(&mut self) -> &mut [Vertex] {
         self.closed_parts.take();
-        self.sources = Vec::new();
         &mut self.vertices
     }
 
     /// The closed parts of the soup's positions (the winding fill's part analysis), found on the first call.
     pub(crate) fn closed_parts(&self) -> &SoupParts {
-        self.closed_parts.get_or_init(|| SoupParts::of(self))
+        self.closed_parts.get_or_init(|| Arc::new(SoupParts::of(self)))
     }
 
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.
@@ -316,23 +290,6 @@ mod tests {
         for x in values {
             assert_eq!(floor_to_i64(x), x.floor() as i64, "{x}");
         }
-    }
-
-    #[test]
-    fn source_vertices_are_kept_only_while_every_corner_has_one() {
-        let mut soup = TriangleSoup::default();
-        let material = soup.add_material(Material::default());
-        let part = soup.add_part(material, "indexed");
-        let corners = [0.0, 1.0, 2.0].map(|x| Vertex::at([x, x * x, 0.0]));
-        soup.push_indexed_triangle(part, corners, [0, 1, 2]);
-        soup.push_indexed_triangle(part, corners, [0, 1, 2]);
-        assert_eq!(soup.sources(), Some(&[0, 1, 2, 0, 1, 2][..]));
-        let mut moved = soup.clone();
-        moved.vertices_mut()[0].position[2] = 1.0;
-        assert_eq!(moved.sources(), None);
-        soup.push_triangle(part, corners);
-        soup.push_indexed_triangle(part, corners, [0, 1, 2]);
-        assert_eq!((soup.sources(), soup.vertices().len()), (None, 12));
     }
 
     #[test]

@@ -142,6 +142,7 @@ impl MaterialCache {
     pub fn prefetch<'a>(&mut self, meshes: impl Iterator<Item = gltf::Mesh<'a>>, buffers: &Buffers) {
         let mut wanted: Vec<gltf::Image<'_>> = meshes
             .flat_map(|mesh| mesh.primitives().collect::<Vec<_>>())
+            .filter(super::has_surface)
             .filter_map(|prim| prim.material().pbr_metallic_roughness().base_color_texture())
             .map(|info| info.texture().source())
             .filter(|image| !self.images.contains_key(&image.index()))

@@ -66,7 +66,6 @@ fn import_with<T>(
         buffers: &buffers,
         parts_of_mesh: HashMap::new(),
         instances: Vec::new(),
-        source_vertices: 0,
     };
     let instances = scene_instances(&document)?;
     builder.materials.prefetch(instances.iter().filter_map(|(node, _)| node.mesh()), &buffers);
@@ -127,6 +126,11 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
     Ok(out)
 }
 
+/// Whether `prim` draws triangles (points and lines have no surface to voxelize).
+fn has_surface(prim: &gltf::Primitive<'_>) -> bool {
+    !matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip)
+}
+
 /// Expands primitive indices of `mode` into triangle corner triples.
 fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
     match mode {
@@ -150,8 +154,6 @@ struct SoupBuilder<'a> {
     parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
     /// Where each part came from.
     instances: Vec<PartSource>,
-    /// The source vertices numbered so far (each primitive instance's vertices get the next numbers).
-    source_vertices: u32,
 }
 
 /// One primitive's triangles in mesh space with their attributes.
@@ -193,9 +195,6 @@ impl SoupBuilder<'_> {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
                 })
                 .collect();
-            let first_source = self.source_vertices;
-            let numbered = u32::try_from(world.len()).ok().and_then(|n| first_source.checked_add(n));
-            self.source_vertices = numbered.unwrap_or(u32::MAX);
             for tri in &prim.triangles {
                 let corners = tri.map(|i| {
                     let i = i as usize;
@@ -205,10 +204,7 @@ impl SoupBuilder<'_> {
                         color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
                     }
                 });
-                match numbered {
-                    Some(_) => self.soup.push_indexed_triangle(part, corners, tri.map(|i| first_source + i)),
-                    None => self.soup.push_triangle(part, corners),
-                }
+                self.soup.push_triangle(part, corners);
             }
         }
         Ok(())
@@ -224,7 +220,7 @@ impl SoupBuilder<'_> {
             mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned),
             prim.index()
         );
-        if matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
+        if !has_surface(prim) {
             return Ok(None);
         }
         let draco = DracoPrimitive::decode(prim, self.document, self.buffers, &name)?;

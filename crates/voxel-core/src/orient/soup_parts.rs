@@ -12,12 +12,12 @@
 use std::sync::Arc;
 
 use super::Parts;
-use super::weld::{all_different, grid_key, soup_key, weld, weld_sources};
+use super::weld::{all_different, grid_key, soup_key, weld};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
 
 /// The closed parts of a soup's own positions.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct SoupParts {
     /// The first corner at each of the soup's distinct positions.
     first: Vec<u32>,
@@ -29,11 +29,7 @@ impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
-        let key = |c: usize| soup_key(corners[c].position);
-        let welded = soup
-            .sources()
-            .and_then(|sources| weld_sources(sources, key))
-            .unwrap_or_else(|| weld(corners.len(), (0..corners.len()).map(key)));
+        let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
         Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
     }
 
@@ -100,27 +96,6 @@ mod tests {
                 assert_eq!(*parts, Parts::find(&tris), "gap {gap}, R={r}");
             }
         }
-    }
-
-    #[test]
-    fn source_vertices_give_the_analysis_of_the_corners() {
-        // The touching boxes, each corner pushed with its mesh vertex: welded by source, the same parts.
-        let soup = boxes(0.0);
-        let mut indexed = TriangleSoup::default();
-        let material = indexed.add_material(Default::default());
-        let part = indexed.add_part(material, "indexed");
-        let mut sources = std::collections::HashMap::new();
-        for t in soup.vertices().chunks_exact(3) {
-            let numbers = [0, 1, 2].map(|k| {
-                let next = sources.len() as u32;
-                *sources.entry(t[k].position.map(f32::to_bits)).or_insert(next)
-            });
-            indexed.push_indexed_triangle(part, [t[0], t[1], t[2]], numbers);
-        }
-        assert!(indexed.sources().is_some());
-        assert_eq!(indexed.closed_parts().first, soup.closed_parts().first);
-        assert_eq!(*indexed.closed_parts().parts, *soup.closed_parts().parts);
-        assert_eq!(soup.closed_parts().parts.count, 1);
     }
 
     #[test]

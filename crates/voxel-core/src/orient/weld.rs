@@ -96,35 +96,6 @@ pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welde
     welded
 }
 
-/// Welds corners made from source vertices (`sources`, one per corner; corners with one source share its
-/// position), `key` giving a corner's key: only each source's first corner is looked up, and the positions are
-/// numbered as [`weld`] numbers them. `None` when the source numbers reach beyond twice the corner count (so
-/// sparse that a table indexed by them would cost more than welding the corners).
-pub(crate) fn weld_sources<K: Key>(sources: &[u32], key: impl Fn(usize) -> K) -> Option<Welded> {
-    let end = sources.iter().max().map_or(0, |&s| s as usize + 1);
-    if end > 2 * sources.len() {
-        return None;
-    }
-    // Each source's number in order of first appearance, and its first corner.
-    let mut seen = vec![u32::MAX; end];
-    let mut first_of_seen: Vec<u32> = Vec::new();
-    for (c, &s) in sources.iter().enumerate() {
-        if seen[s as usize] == u32::MAX {
-            seen[s as usize] = first_of_seen.len() as u32;
-            first_of_seen.push(c as u32);
-        }
-    }
-    let by_source = weld(first_of_seen.len(), first_of_seen.iter().map(|&c| key(c as usize)));
-    // Each source's position, then each corner's through its source.
-    for number in seen.iter_mut().filter(|n| **n != u32::MAX) {
-        *number = by_source.id[*number as usize];
-    }
-    Some(Welded {
-        id: sources.iter().map(|&s| seen[s as usize]).collect(),
-        first: by_source.first.iter().map(|&k| first_of_seen[k as usize]).collect(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -143,19 +114,5 @@ mod tests {
         let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
         assert!(all_different(welded.first.len(), firsts.clone()));
         assert!(!all_different(welded.first.len() + 1, firsts.clone().chain([grid_key(many[5_000])])));
-    }
-
-    #[test]
-    fn welding_by_source_numbers_the_positions_as_welding_the_corners() {
-        // Sources 0 and 3 at one position, 1 and 2 at others; corners in an order that meets them out of turn.
-        let at = [[0.0, 0.0, 1.0], [2.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 0.0, 1.0]];
-        let sources = [2, 3, 2, 1, 0, 3, 1];
-        let key = |c: usize| soup_key(at[sources[c] as usize]);
-        let by_source = weld_sources(&sources, key).unwrap();
-        let by_corner = weld(sources.len(), (0..sources.len()).map(key));
-        assert_eq!((&by_source.id, &by_source.first), (&by_corner.id, &by_corner.first));
-        assert_eq!((by_source.id, by_source.first), (vec![0, 1, 0, 2, 1, 1, 2], vec![0, 1, 3]));
-        // Numbers beyond twice the corner count: left to corner welding.
-        assert!(weld_sources(&[0, 7, 1], |c| soup_key(at[c])).is_none());
     }
 }
