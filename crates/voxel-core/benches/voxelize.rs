@@ -10,7 +10,7 @@
 //! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- fill-runs NAME R FILL N` loads the first model whose name
-//! contains NAME and voxelizes it N times at R (or at each of a list, `32,48,64`: the app's grid slider) with
+//! contains NAME and voxelizes it N times at R (or at each of a list, `32,48,64`: the app's grid slider; `default`: the default cell size) with
 //! FILL (`winding` or `parity`), for an instruction count:
 //! under `valgrind --tool=cachegrind --cache-sim=no` with `RAYON_NUM_THREADS=1`, (Ir at N − Ir at 0) / N is
 //! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
@@ -153,8 +153,11 @@ fn main() {
     if let Some(at) = args.iter().position(|a| a == "fill-runs") {
         let [name, r, fill, n] = [1, 2, 3, 4].map(|k| args.get(at + k).expect("fill-runs NAME R FILL N").as_str());
         let fill = if fill == "parity" { FillMode::Parity } else { FillMode::Winding };
-        let options =
-            |r: &str| VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), fill, ..Default::default() };
+        let grid = |r: &str| match r {
+            "default" => GridSize::default(),
+            r => GridSize::Resolution(r.parse().expect("R or default")),
+        };
+        let options = |r: &str| VoxelizeOptions { grid: grid(r), fill, ..Default::default() };
         let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
         let soup = load_file(file).expect("load");
         let resolutions: Vec<&str> = r.split(',').collect();
