@@ -49,16 +49,20 @@ pub(crate) struct Crossing {
     pub z: f64,
 }
 
-/// Every column's crossings in one flat list, sorted by column, then depth, then triangle.
+/// Every column's crossings in one flat list, sorted by column, then depth, then triangle, and which way the
+/// crossed triangles face.
 pub(crate) struct Columns {
     /// Crossings of column c are `crossings[starts[c]..starts[c + 1]]`.
     starts: Vec<usize>,
     crossings: Vec<Crossing>,
+    /// Per triangle: whether its projection on the XY plane runs counter-clockwise, so that with its corners
+    /// in the file's order it faces up (+Z). Only read for triangles that some column crosses.
+    pub faces_up: Vec<bool>,
 }
 
 impl Columns {
     /// Indexes crossings already sorted by column (then depth, then triangle), for `count` columns.
-    fn from_sorted(count: usize, crossings: Vec<Crossing>) -> Self {
+    fn from_sorted(count: usize, crossings: Vec<Crossing>, faces_up: Vec<bool>) -> Self {
         let mut starts = vec![0; count + 1];
         for c in &crossings {
             starts[c.column as usize + 1] += 1;
@@ -66,7 +70,7 @@ impl Columns {
         for c in 0..count {
             starts[c + 1] += starts[c];
         }
-        Self { starts, crossings }
+        Self { starts, crossings, faces_up }
     }
 
     /// The number of columns.
@@ -164,10 +168,12 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
     let ny = spec.dims[1];
     let per_task = triangles_per_task(tris.len());
+    let mut faces_up = vec![false; tris.len()];
     let lists: Vec<Segments<Crossing>> = tris
         .par_chunks(per_task)
+        .zip(faces_up.par_chunks_mut(per_task))
         .enumerate()
-        .map(|(chunk_index, chunk)| {
+        .map(|(chunk_index, (chunk, up))| {
             let mut out = Segments::default();
             for (k, t) in chunk.iter().enumerate() {
                 let triangle = (chunk_index * per_task + k) as u32;
@@ -177,6 +183,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
                     continue; // no column centre under the triangle's extent
                 }
                 let Some(counter_clockwise) = projected_orientation(t) else { continue };
+                up[k] = counter_clockwise;
                 for x in xs {
                     let px = f64::from(x) + 0.5;
                     for y in covered_run(t, counter_clockwise, px, ys.clone()) {
@@ -193,7 +200,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
     let count = spec.dims[0] as usize * ny as usize;
     let mut crossings = radix::sort_parts_by_key(Segments::concat(lists), radix::bits_for(count), |c| c.column);
     crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
-    Columns::from_sorted(count, crossings)
+    Columns::from_sorted(count, crossings, faces_up)
 }
 
 /// Every column crossing, column-major: one BVH query per column (a box around the column's line).
@@ -215,7 +222,8 @@ pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &Tri
             found
         })
         .collect();
-    Columns::from_sorted(count, crossings)
+    let faces_up = tris.par_iter().map(|t| projected_orientation(t) == Some(true)).collect();
+    Columns::from_sorted(count, crossings, faces_up)
 }
 
 /// Whether a column's parity crossings count: only when there is an even number of them.

@@ -52,9 +52,7 @@ mod weld;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use glam::DVec3;
 use rayon::prelude::*;
-use robust::{Coord, orient2d};
 
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
@@ -82,6 +80,11 @@ impl Role {
             Role::Leaves => -1,
             Role::Parity => 0,
         }
+    }
+
+    /// The winding role of a triangle with its corner order as in the file, by whether it faces up (+Z).
+    fn facing(faces_up: bool) -> Self {
+        if faces_up { Role::Leaves } else { Role::Enters }
     }
 
     /// The role of the triangle with its corner order reversed.
@@ -291,7 +294,7 @@ pub(crate) fn winding_roles(
             &computed
         }
     };
-    let as_in_file: Vec<Role> = tris.par_iter().map(facing_role).collect();
+    let as_in_file: Vec<Role> = columns.faces_up.iter().map(|&up| Role::facing(up)).collect();
     if consistent_as_in_file(columns, &as_in_file) {
         return as_in_file;
     }
@@ -307,15 +310,14 @@ pub(crate) fn winding_roles(
     }
     // Facing inwards in the file: a negative volume.
     let inward: Vec<bool> = volume.iter().map(|&v| v < 0.0).collect();
-    let mut roles: Vec<Role> = as_in_file
-        .into_par_iter()
-        .enumerate()
-        .map(|(t, role)| match (parts.of[t], parts.reversed[t]) {
-            (NO_PART, _) => Role::Parity,
-            (_, reversed) if reversed => role.reversed(),
-            _ => role,
-        })
-        .collect();
+    let mut roles = as_in_file;
+    for ((role, &part), &reversed) in roles.iter_mut().zip(&parts.of).zip(&parts.reversed) {
+        *role = match part {
+            NO_PART => Role::Parity,
+            _ if reversed => role.reversed(),
+            _ => *role,
+        };
+    }
     if !inward.contains(&true) {
         return roles;
     }
@@ -326,13 +328,6 @@ pub(crate) fn winding_roles(
         }
     }
     roles
-}
-
-/// The winding role of a triangle with its corner order as in the file.
-fn facing_role(t: &GridTriangle) -> Role {
-    let xy = |v: DVec3| Coord { x: v.x, y: v.y };
-    let faces_up = orient2d(xy(t[0]), xy(t[1]), xy(t[2])) > 0.0;
-    if faces_up { Role::Leaves } else { Role::Enters }
 }
 
 /// Whether the triangles as they face in the file already wind consistently as far as any column can
@@ -382,6 +377,8 @@ fn exposed_parts(columns: &Columns, roles: &[Role], part_of: &[u32], inward: &[b
 
 #[cfg(test)]
 mod tests {
+    use glam::DVec3;
+
     use super::*;
     use crate::fill::crossings_by_rasterizing;
     use crate::grid::{GridSize, GridSpec};
