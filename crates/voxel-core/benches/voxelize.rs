@@ -10,8 +10,8 @@
 //! median time of the parity and the winding fill (interleaved runs in one process) and their ratio.
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- fill-runs NAME R FILL N` loads the first model whose name
-//! contains NAME and voxelizes it N times at R (or at each of a list, `32,48,64`: the app's grid slider; `default`: the default cell size) with
-//! FILL (`winding` or `parity`), for an instruction count:
+//! contains NAME and voxelizes it N times at R (or at each of a list, `32,48,64`: the app's grid slider;
+//! `default`: the default cell size) with FILL (`winding` or `parity`), for an instruction count:
 //! under `valgrind --tool=cachegrind --cache-sim=no` with `RAYON_NUM_THREADS=1`, (Ir at N − Ir at 0) / N is
 //! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
 //!

@@ -3,7 +3,7 @@
 //! Handles .glb, .gltf with external buffers and images, data URIs, the default scene's node hierarchy
 //! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression
 //! and EXT_meshopt_compression. Files that require an extension we cannot decode are refused with an error
-//! naming it; malformed files are refused with an error naming what is wrong (see [`validate`]).
+//! naming it; malformed files are refused with an error naming what is wrong (see the `validate` module).
 
 mod accessor;
 mod animation;
