@@ -1,5 +1,8 @@
-//! The conservative surface shell: every cell a triangle overlaps, with the triangle nearest to the cell's
-//! centre (for colour) and whether the solid fill already accounts for that piece of surface.
+//! The conservative surface shell: every cell a triangle overlaps, with the triangles overlapping each (for
+//! colour), and which of its cells carry a piece of surface the solid fill does not account for.
+//!
+//! The shell does not depend on the fill, so the pipeline builds both side by side; only the thin cells
+//! ([`Shell::thin_cells`]) are found afterwards, from the fill.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -21,9 +24,8 @@ pub(crate) struct Shell {
     /// `tris[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
     offsets: Vec<u32>,
     tris: Vec<u32>,
-    /// For each cell, whether a thin piece of surface passes through it: a triangle overlaps it while
-    /// neither the cell nor its neighbours on either side along the triangle's normal are filled.
-    pub thin: Vec<bool>,
+    /// Per triangle, its [`normal_step`] as a [`step_code`] (that of no step for a zero-area triangle).
+    steps: Vec<u8>,
 }
 
 impl Shell {
@@ -39,6 +41,50 @@ impl Shell {
     pub fn triangles_at(&self, k: usize) -> &[u32] {
         &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize]
     }
+
+    /// The shell cells that a thin piece of surface passes through, ascending: cells the solid `fill`
+    /// leaves empty, overlapped by a triangle whose neighbours of the cell on either side along the
+    /// triangle's normal are empty too (deterministic whatever the thread count).
+    // Out of line, like `shell`, so that an instruction profile can split it from the passes around it.
+    #[inline(never)]
+    pub fn thin_cells(&self, spec: &GridSpec, fill: &BitGrid) -> Vec<u32> {
+        let neighbours: [Neighbour; STEP_CODES] = std::array::from_fn(|code| Neighbour::new(spec, step_of(code)));
+        let thin = |k: usize| {
+            let index = self.cells[k] as usize;
+            if fill.get(index) {
+                return false;
+            }
+            let c = spec.coords(index);
+            self.triangles_at(k).iter().any(|&tri| {
+                let code = usize::from(self.steps[tri as usize]);
+                // The opposite step's code mirrors this one's.
+                [code, STEP_CODES - 1 - code].iter().all(|&n| !neighbours[n].filled(spec, fill, c, index))
+            })
+        };
+        (0..self.cells.len())
+            .into_par_iter()
+            .with_min_len(THIN_CHUNK)
+            .filter(|&k| thin(k))
+            .map(|k| self.cells[k])
+            .collect()
+    }
+}
+
+/// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
+const THIN_CHUNK: usize = 4096;
+
+/// The number of [`step_code`]s: three values per axis.
+const STEP_CODES: usize = 27;
+
+/// A step of -1, 0 or 1 along each axis in one byte, below [`STEP_CODES`]; the opposite step's code is
+/// `STEP_CODES - 1` minus this one.
+fn step_code(step: [i32; 3]) -> u8 {
+    step.iter().fold(0, |code, &s| code * 3 + (s + 1) as u8)
+}
+
+/// The step of a [`step_code`].
+fn step_of(code: usize) -> [i32; 3] {
+    [code / 9, code / 3 % 3, code % 3].map(|s| s as i32 - 1)
 }
 
 /// The step to the face, edge or corner neighbour along a normal: components within half of the largest
@@ -48,9 +94,9 @@ fn normal_step(n: DVec3) -> [i32; 3] {
     [n.x, n.y, n.z].map(|c| if c.abs() >= 0.5 * m { c.signum() as i32 } else { 0 })
 }
 
-/// One (cell, triangle) overlap packed for sorting: cell, then triangle, then the thin flag.
-fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
-    (cell as u64) << 32 | (tri as u64) << 1 | u64::from(thin)
+/// One (cell, triangle) overlap packed for sorting: cell, then triangle.
+fn pack(cell: usize, tri: usize) -> u64 {
+    (cell as u64) << 32 | tri as u64
 }
 
 /// How much of the triangle–box test a candidate cell needs.
@@ -129,32 +175,26 @@ const FEW_COLUMNS: u32 = 9;
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
-/// them).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Segments<u64>) {
+/// them). Returns the [`step_code`] of the triangle's [`normal_step`] (that of no step when it has no area).
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segments<u64>) -> u8 {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
-        return; // zero-area triangles add no surface
+        return step_code([0; 3]); // zero-area triangles add no surface
     }
-    let step = normal_step(n);
-    let back = step.map(|s| -s);
+    let step = step_code(normal_step(n));
     let corners = t.map(|w| w.to_array());
     let lo = t[0].min(t[1]).min(t[2]).to_array();
     let hi = t[0].max(t[1]).max(t[2]).to_array();
     let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
     let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
-    let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
-    let mut push = |c: [u32; 3]| {
-        let index = spec.index(c[0], c[1], c[2]);
-        let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
-        out.push(pack(index, tri, thin));
-    };
+    let mut push = |c: [u32; 3]| out.push(pack(spec.index(c[0], c[1], c[2]), tri));
     // The cells of the triangle's extent.
     let (first, last) = ([0, 1, 2].map(|a| cell_of(a, lo[a])), [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])));
     if first == last {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         push(first);
-        return;
+        return step;
     }
     let an = n.abs();
     let d = if an.x >= an.y && an.x >= an.z {
@@ -210,6 +250,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, 
             }
         }
     }
+    step
 }
 
 /// The cell one step along a fixed direction from the cells of a triangle.
@@ -232,15 +273,17 @@ impl Neighbour {
     }
 }
 
-/// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
+/// Computes the shell of `tris` (deterministic whatever the thread count).
 // Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
-pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
-    let lists: Vec<Segments<u64>> = (0..tris.len())
-        .into_par_iter()
-        .fold(Segments::default, |mut out, tri| {
-            overlaps(spec, tris, tri, fill, &mut out);
+pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
+    let mut steps = vec![0u8; tris.len()];
+    let lists: Vec<Segments<u64>> = steps
+        .par_iter_mut()
+        .enumerate()
+        .fold(Segments::default, |mut out, (tri, step)| {
+            *step = overlaps(spec, tris, tri, &mut out);
             out
         })
         .collect();
@@ -248,31 +291,26 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
     // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle). The sort's last
     // pass writes each overlap's fields to its position: the triangles are the compressed rows' already.
     let len = parts.iter().map(Vec::len).sum();
-    let (mut cells, mut tris, mut thin) = (vec![0u32; len], vec![0u32; len], vec![false; len]);
+    let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
     radix::sort_parts_into(
         parts,
         radix::bits_for(spec.cell_count()),
         |p| (p >> 32) as u32,
-        |at, p| {
-            (cells[at], tris[at], thin[at]) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
-        },
+        |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
     );
-    // Compressed rows: each run of equal cells becomes one cell, its flag the union of theirs, in place.
+    // Compressed rows: each run of equal cells becomes one cell, in place.
     let mut offsets = Vec::new();
     let mut count = 0;
     for k in 0..len {
-        if count > 0 && cells[count - 1] == cells[k] {
-            thin[count - 1] |= thin[k];
-        } else {
+        if count == 0 || cells[count - 1] != cells[k] {
             offsets.push(k as u32);
-            (cells[count], thin[count]) = (cells[k], thin[k]);
+            cells[count] = cells[k];
             count += 1;
         }
     }
     offsets.push(len as u32);
     cells.truncate(count);
-    thin.truncate(count);
-    Shell { cells, offsets, tris, thin }
+    Shell { cells, offsets, tris, steps }
 }
 
 #[cfg(test)]
@@ -340,6 +378,17 @@ mod tests {
         for ((from, to), last) in cases {
             assert_eq!(last_cell_of(from, to, 10), last, "[{from}, {to}]");
         }
+    }
+
+    #[test]
+    fn step_codes_round_trip_and_mirror_the_opposite_step() {
+        let steps: Vec<[i32; 3]> = (0..STEP_CODES).map(step_of).collect();
+        for (code, &step) in steps.iter().enumerate() {
+            assert_eq!(usize::from(step_code(step)), code, "{step:?}");
+            assert_eq!(steps[STEP_CODES - 1 - code], step.map(|s| -s), "{step:?}");
+        }
+        assert_eq!(steps[usize::from(step_code([0; 3]))], [0; 3]);
+        assert_eq!(step_of(0), [-1; 3]);
     }
 
     #[test]
