@@ -317,6 +317,9 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
 mod tests {
     use super::*;
     use crate::geom::BoxTester;
+    use crate::grid::GridSize;
+    use crate::shapes::torus;
+    use crate::soup::TriangleSoup;
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
@@ -378,6 +381,33 @@ mod tests {
         for ((from, to), last) in cases {
             assert_eq!(last_cell_of(from, to, 10), last, "[{from}, {to}]");
         }
+    }
+
+    #[test]
+    fn thin_cells_are_the_empty_cells_with_a_triangle_whose_normal_neighbours_are_empty() {
+        let soup = TriangleSoup::from_mesh(&torus(2.0, 0.7, 20), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
+        let tris = spec.grid_triangles(&soup);
+        let shell = shell(&spec, &tris);
+        // A scattered fill: about one cell in three, the grid's faces included.
+        let mut fill = BitGrid::new(spec.cell_count());
+        (0..spec.cell_count()).filter(|i| (i * 2654435761) % 97 < 32).for_each(|i| fill.set(i));
+        let empty = |index: Option<usize>| index.is_none_or(|i| !fill.get(i));
+        let expected: Vec<u32> = (0..shell.cells.len())
+            .filter(|&k| {
+                let index = shell.cells[k] as usize;
+                let t = |tri: u32| &tris[tri as usize];
+                let sides = |tri| {
+                    let step = normal_step((t(tri)[1] - t(tri)[0]).cross(t(tri)[2] - t(tri)[0]));
+                    [step, step.map(|s| -s)].map(|s| spec.offset(index, s))
+                };
+                !fill.get(index) && shell.triangles_at(k).iter().any(|&tri| sides(tri).into_iter().all(empty))
+            })
+            .map(|k| shell.cells[k])
+            .collect();
+        let empty_cells = shell.cells.iter().filter(|&&c| !fill.get(c as usize)).count();
+        assert!(expected.len() > 20 && expected.len() + 20 < empty_cells, "{} of {empty_cells}", expected.len());
+        assert_eq!(shell.thin_cells(&spec, &fill), expected);
     }
 
     #[test]
