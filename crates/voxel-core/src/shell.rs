@@ -24,8 +24,6 @@ pub(crate) struct Shell {
     /// `tris[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
     offsets: Vec<u32>,
     tris: Vec<u32>,
-    /// Per triangle, its [`normal_step`] as a [`step_code`] (that of no step for a zero-area triangle).
-    steps: Vec<u8>,
 }
 
 impl Shell {
@@ -43,12 +41,14 @@ impl Shell {
     }
 
     /// The shell cells that a thin piece of surface passes through, ascending: cells the solid `fill`
-    /// leaves empty, overlapped by a triangle whose neighbours of the cell on either side along the
-    /// triangle's normal are empty too (deterministic whatever the thread count).
+    /// leaves empty, overlapped by a triangle of `tris` (the triangles the shell was built from) whose
+    /// neighbours of the cell on either side along the triangle's normal are empty too (deterministic
+    /// whatever the thread count).
     // Out of line, like `shell`, so that an instruction profile can split it from the passes around it.
+    // Each triangle's normal is found again here rather than kept from the shell pass: only the cells the fill
+    // leaves empty need it, far fewer than the overlaps at the default grid (measured: docs/benchmarks.md).
     #[inline(never)]
-    pub fn thin_cells(&self, spec: &GridSpec, fill: &BitGrid) -> Vec<u32> {
-        let neighbours: [Neighbour; STEP_CODES] = std::array::from_fn(|code| Neighbour::new(spec, step_of(code)));
+    pub fn thin_cells(&self, spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Vec<u32> {
         let thin = |k: usize| {
             let index = self.cells[k] as usize;
             if fill.get(index) {
@@ -56,9 +56,9 @@ impl Shell {
             }
             let c = spec.coords(index);
             self.triangles_at(k).iter().any(|&tri| {
-                let code = usize::from(self.steps[tri as usize]);
-                // The opposite step's code mirrors this one's.
-                [code, STEP_CODES - 1 - code].iter().all(|&n| !neighbours[n].filled(spec, fill, c, index))
+                let t = &tris[tri as usize];
+                let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
+                [step, step.map(|s| -s)].into_iter().all(|s| !Neighbour::new(spec, s).filled(spec, fill, c, index))
             })
         };
         (0..self.cells.len())
@@ -72,20 +72,6 @@ impl Shell {
 
 /// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
 const THIN_CHUNK: usize = 4096;
-
-/// The number of [`step_code`]s: three values per axis.
-const STEP_CODES: usize = 27;
-
-/// A step of -1, 0 or 1 along each axis in one byte, below [`STEP_CODES`]; the opposite step's code is
-/// `STEP_CODES - 1` minus this one.
-fn step_code(step: [i32; 3]) -> u8 {
-    step.iter().fold(0, |code, &s| code * 3 + (s + 1) as u8)
-}
-
-/// The step of a [`step_code`].
-fn step_of(code: usize) -> [i32; 3] {
-    [code / 9, code / 3 % 3, code % 3].map(|s| s as i32 - 1)
-}
 
 /// The step to the face, edge or corner neighbour along a normal: components within half of the largest
 /// one count.
@@ -175,14 +161,13 @@ const FEW_COLUMNS: u32 = 9;
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
-/// them). Returns the [`step_code`] of the triangle's [`normal_step`] (that of no step when it has no area).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segments<u64>) -> u8 {
+/// them).
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segments<u64>) {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
-        return step_code([0; 3]); // zero-area triangles add no surface
+        return; // zero-area triangles add no surface
     }
-    let step = step_code(normal_step(n));
     let corners = t.map(|w| w.to_array());
     let lo = t[0].min(t[1]).min(t[2]).to_array();
     let hi = t[0].max(t[1]).max(t[2]).to_array();
@@ -194,7 +179,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segmen
     if first == last {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         push(first);
-        return step;
+        return;
     }
     let an = n.abs();
     let d = if an.x >= an.y && an.x >= an.z {
@@ -250,7 +235,6 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segmen
             }
         }
     }
-    step
 }
 
 /// The cell one step along a fixed direction from the cells of a triangle.
@@ -278,12 +262,10 @@ impl Neighbour {
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
-    let mut steps = vec![0u8; tris.len()];
-    let lists: Vec<Segments<u64>> = steps
-        .par_iter_mut()
-        .enumerate()
-        .fold(Segments::default, |mut out, (tri, step)| {
-            *step = overlaps(spec, tris, tri, &mut out);
+    let lists: Vec<Segments<u64>> = (0..tris.len())
+        .into_par_iter()
+        .fold(Segments::default, |mut out, tri| {
+            overlaps(spec, tris, tri, &mut out);
             out
         })
         .collect();
@@ -310,7 +292,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
     }
     offsets.push(len as u32);
     cells.truncate(count);
-    Shell { cells, offsets, tris, steps }
+    Shell { cells, offsets, tris }
 }
 
 #[cfg(test)]
@@ -407,18 +389,7 @@ mod tests {
             .collect();
         let empty_cells = shell.cells.iter().filter(|&&c| !fill.get(c as usize)).count();
         assert!(expected.len() > 20 && expected.len() + 20 < empty_cells, "{} of {empty_cells}", expected.len());
-        assert_eq!(shell.thin_cells(&spec, &fill), expected);
-    }
-
-    #[test]
-    fn step_codes_round_trip_and_mirror_the_opposite_step() {
-        let steps: Vec<[i32; 3]> = (0..STEP_CODES).map(step_of).collect();
-        for (code, &step) in steps.iter().enumerate() {
-            assert_eq!(usize::from(step_code(step)), code, "{step:?}");
-            assert_eq!(steps[STEP_CODES - 1 - code], step.map(|s| -s), "{step:?}");
-        }
-        assert_eq!(steps[usize::from(step_code([0; 3]))], [0; 3]);
-        assert_eq!(step_of(0), [-1; 3]);
+        assert_eq!(shell.thin_cells(&spec, &tris, &fill), expected);
     }
 
     #[test]

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 use crate::colour_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
+use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSize, GridSpec};
 use crate::radix;
 use crate::shell::{Shell, shell};
@@ -167,7 +168,7 @@ fn voxelize_within_timed(
         },
         || timed(|| shell(&spec, &tris)),
     );
-    let solid = combine(&spec, options, fill, &shell);
+    let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
     let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
@@ -205,8 +206,8 @@ fn distinct(mut values: Vec<u32>) -> usize {
     values.len()
 }
 
-/// The solid cells from the fill and the shell, per the modes.
-fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell) -> BitGrid {
+/// The solid cells from the fill and the shell of `tris`, per the modes.
+fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &[GridTriangle]) -> BitGrid {
     let shell_bits = || {
         let mut bits = BitGrid::new(spec.cell_count());
         for &c in &shell.cells {
@@ -224,7 +225,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
                     }
                 }
                 ShellMode::Auto => {
-                    for c in shell.thin_cells(spec, &solid) {
+                    for c in shell.thin_cells(spec, tris, &solid) {
                         solid.set(c as usize);
                     }
                 }
