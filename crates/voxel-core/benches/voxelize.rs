@@ -20,6 +20,12 @@
 //! times; nothing else runs, so under cachegrind (as for `fill-runs`) (Ir at N − Ir at 0) / N is one
 //! voxelization's instructions.
 //!
+//! `cargo bench -p voxel-core --bench voxelize -- first-runs NAME R N` voxelizes the first model whose name
+//! contains NAME at R (or `default`) N times with the parity and N times with the winding fill, interleaved,
+//! each run on a fresh copy of the soup (so every winding run pays the soup's part analysis, as the one-shot
+//! CLI does), and prints the median and the minimum wall time of each (only the voxelize call is timed) and
+//! their ratios.
+//!
 //! `cargo bench -p voxel-core --bench voxelize -- hashes` prints, per model, a hash of every output voxel
 //! (cell, colour, part, visibility) at the default grid and R = 64, 128, 256, solid and hollow, plus the
 //! default grid with the pastel remap: two builds that print the same lines give the same cells and colours.
@@ -119,6 +125,39 @@ fn print_hashes(name: &str, soup: &TriangleSoup) {
     println!("{name}: {}", line.join(" "));
 }
 
+/// The grid of a bench argument: a resolution, or `default` (the default cell size).
+fn grid_arg(r: &str) -> GridSize {
+    match r {
+        "default" => GridSize::default(),
+        r => GridSize::Resolution(r.parse().expect("R or default")),
+    }
+}
+
+/// Prints the median wall time of `runs` first parity and first winding voxelizations of `soup` at `r`
+/// (interleaved, each on a fresh copy of the soup that knows nothing of its parts yet) and their ratio.
+fn print_first_runs(name: &str, soup: &TriangleSoup, r: &str, runs: usize) {
+    let options = |fill| VoxelizeOptions { grid: grid_arg(r), fill, ..Default::default() };
+    let (parity, winding) = (options(FillMode::Parity), options(FillMode::Winding));
+    let run = |options: &VoxelizeOptions| {
+        let mut fresh = soup.clone();
+        fresh.vertices_mut(); // forgets the part analysis a clone shares
+        let t = Instant::now();
+        voxelize(&fresh, options).expect("voxelize");
+        t.elapsed()
+    };
+    let (parity_ms, winding_ms): (Vec<_>, Vec<_>) = (0..runs).map(|_| (run(&parity), run(&winding))).unzip();
+    // The minimum too: on a shared machine it is the run least disturbed by the other processes.
+    let min_ms = |times: &[Duration]| times.iter().min().map_or(f64::NAN, |t| t.as_secs_f64() * 1e3);
+    let (parity_min, winding_min) = (min_ms(&parity_ms), min_ms(&winding_ms));
+    let (parity_ms, winding_ms) = (median_ms(parity_ms), median_ms(winding_ms));
+    println!(
+        "{name} R={r}: parity {parity_ms:.2} ms, first winding {winding_ms:.2} ms, ratio {:.3} (medians of {runs}); \
+         minima {parity_min:.2} / {winding_min:.2} ms, ratio {:.3}",
+        winding_ms / parity_ms,
+        winding_min / parity_min
+    );
+}
+
 /// Calls `f` with the name (relative to `dir`) and soup of every model of `files` that loads.
 fn for_each_model(files: &[PathBuf], dir: &std::path::Path, f: impl Fn(&str, &TriangleSoup)) {
     for file in files {
@@ -153,11 +192,7 @@ fn main() {
     if let Some(at) = args.iter().position(|a| a == "fill-runs") {
         let [name, r, fill, n] = [1, 2, 3, 4].map(|k| args.get(at + k).expect("fill-runs NAME R FILL N").as_str());
         let fill = if fill == "parity" { FillMode::Parity } else { FillMode::Winding };
-        let grid = |r: &str| match r {
-            "default" => GridSize::default(),
-            r => GridSize::Resolution(r.parse().expect("R or default")),
-        };
-        let options = |r: &str| VoxelizeOptions { grid: grid(r), fill, ..Default::default() };
+        let options = |r: &str| VoxelizeOptions { grid: grid_arg(r), fill, ..Default::default() };
         let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
         let soup = load_file(file).expect("load");
         let resolutions: Vec<&str> = r.split(',').collect();
@@ -170,6 +205,13 @@ fn main() {
         for (r, hasher) in resolutions.iter().zip(&hashers) {
             println!("R={r}: output hash {:016x}", hasher.finish());
         }
+        return;
+    }
+    if let Some(at) = args.iter().position(|a| a == "first-runs") {
+        let [name, r, n] = [1, 2, 3].map(|k| args.get(at + k).expect("first-runs NAME R N").as_str());
+        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
+        let soup = load_file(file).expect("load");
+        print_first_runs(name, &soup, r, n.parse().expect("N"));
         return;
     }
     if let Some(at) = args.iter().position(|a| a == "pass-runs") {

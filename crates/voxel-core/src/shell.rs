@@ -1,5 +1,8 @@
-//! The conservative surface shell: every cell a triangle overlaps, with the triangle nearest to the cell's
-//! centre (for colour) and whether the solid fill already accounts for that piece of surface.
+//! The conservative surface shell: every cell a triangle overlaps, with the triangles overlapping each (for
+//! colour), and which of its cells carry a piece of surface the solid fill does not account for.
+//!
+//! The shell does not depend on the fill, so the pipeline builds both side by side; only the thin cells
+//! ([`Shell::thin_cells`]) are found afterwards, from the fill.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -21,9 +24,6 @@ pub(crate) struct Shell {
     /// `tris[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
     offsets: Vec<u32>,
     tris: Vec<u32>,
-    /// For each cell, whether a thin piece of surface passes through it: a triangle overlaps it while
-    /// neither the cell nor its neighbours on either side along the triangle's normal are filled.
-    pub thin: Vec<bool>,
 }
 
 impl Shell {
@@ -39,7 +39,39 @@ impl Shell {
     pub fn triangles_at(&self, k: usize) -> &[u32] {
         &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize]
     }
+
+    /// The shell cells that a thin piece of surface passes through, ascending: cells the solid `fill`
+    /// leaves empty, overlapped by a triangle of `tris` (the triangles the shell was built from) whose
+    /// neighbours of the cell on either side along the triangle's normal are empty too (deterministic
+    /// whatever the thread count).
+    // Out of line, like `shell`, so that an instruction profile can split it from the passes around it.
+    // Each triangle's normal is found again here rather than kept from the shell pass: only the cells the fill
+    // leaves empty need it, far fewer than the overlaps at the default grid (measured: docs/benchmarks.md).
+    #[inline(never)]
+    pub fn thin_cells(&self, spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Vec<u32> {
+        let thin = |k: usize| {
+            let index = self.cells[k] as usize;
+            if fill.get(index) {
+                return false;
+            }
+            let c = spec.coords(index);
+            self.triangles_at(k).iter().any(|&tri| {
+                let t = &tris[tri as usize];
+                let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
+                [step, step.map(|s| -s)].into_iter().all(|s| !Neighbour::new(spec, s).filled(spec, fill, c, index))
+            })
+        };
+        (0..self.cells.len())
+            .into_par_iter()
+            .with_min_len(THIN_CHUNK)
+            .filter(|&k| thin(k))
+            .map(|k| self.cells[k])
+            .collect()
+    }
 }
+
+/// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
+const THIN_CHUNK: usize = 4096;
 
 /// The step to the face, edge or corner neighbour along a normal: components within half of the largest
 /// one count.
@@ -48,9 +80,9 @@ fn normal_step(n: DVec3) -> [i32; 3] {
     [n.x, n.y, n.z].map(|c| if c.abs() >= 0.5 * m { c.signum() as i32 } else { 0 })
 }
 
-/// One (cell, triangle) overlap packed for sorting: cell, then triangle, then the thin flag.
-fn pack(cell: usize, tri: usize, thin: bool) -> u64 {
-    (cell as u64) << 32 | (tri as u64) << 1 | u64::from(thin)
+/// One (cell, triangle) overlap packed for sorting: cell, then triangle.
+fn pack(cell: usize, tri: usize) -> u64 {
+    (cell as u64) << 32 | tri as u64
 }
 
 /// How much of the triangle–box test a candidate cell needs.
@@ -130,25 +162,18 @@ const FEW_COLUMNS: u32 = 9;
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
 /// them).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, fill: &BitGrid, out: &mut Segments<u64>) {
+fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segments<u64>) {
     let t = &tris[tri];
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
         return; // zero-area triangles add no surface
     }
-    let step = normal_step(n);
-    let back = step.map(|s| -s);
     let corners = t.map(|w| w.to_array());
     let lo = t[0].min(t[1]).min(t[2]).to_array();
     let hi = t[0].max(t[1]).max(t[2]).to_array();
     let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
     let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
-    let neighbours = [step, back].map(|s| Neighbour::new(spec, s));
-    let mut push = |c: [u32; 3]| {
-        let index = spec.index(c[0], c[1], c[2]);
-        let thin = !fill.get(index) && !neighbours.iter().any(|n| n.filled(spec, fill, c, index));
-        out.push(pack(index, tri, thin));
-    };
+    let mut push = |c: [u32; 3]| out.push(pack(spec.index(c[0], c[1], c[2]), tri));
     // The cells of the triangle's extent.
     let (first, last) = ([0, 1, 2].map(|a| cell_of(a, lo[a])), [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])));
     if first == last {
@@ -232,15 +257,15 @@ impl Neighbour {
     }
 }
 
-/// Computes the shell of `tris` against the solid `fill` (deterministic whatever the thread count).
+/// Computes the shell of `tris` (deterministic whatever the thread count).
 // Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
-pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Shell {
+pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
     let lists: Vec<Segments<u64>> = (0..tris.len())
         .into_par_iter()
         .fold(Segments::default, |mut out, tri| {
-            overlaps(spec, tris, tri, fill, &mut out);
+            overlaps(spec, tris, tri, &mut out);
             out
         })
         .collect();
@@ -248,37 +273,35 @@ pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> S
     // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle). The sort's last
     // pass writes each overlap's fields to its position: the triangles are the compressed rows' already.
     let len = parts.iter().map(Vec::len).sum();
-    let (mut cells, mut tris, mut thin) = (vec![0u32; len], vec![0u32; len], vec![false; len]);
+    let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
     radix::sort_parts_into(
         parts,
         radix::bits_for(spec.cell_count()),
         |p| (p >> 32) as u32,
-        |at, p| {
-            (cells[at], tris[at], thin[at]) = ((p >> 32) as u32, (p as u32) >> 1, p & 1 == 1);
-        },
+        |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
     );
-    // Compressed rows: each run of equal cells becomes one cell, its flag the union of theirs, in place.
+    // Compressed rows: each run of equal cells becomes one cell, in place.
     let mut offsets = Vec::new();
     let mut count = 0;
     for k in 0..len {
-        if count > 0 && cells[count - 1] == cells[k] {
-            thin[count - 1] |= thin[k];
-        } else {
+        if count == 0 || cells[count - 1] != cells[k] {
             offsets.push(k as u32);
-            (cells[count], thin[count]) = (cells[k], thin[k]);
+            cells[count] = cells[k];
             count += 1;
         }
     }
     offsets.push(len as u32);
     cells.truncate(count);
-    thin.truncate(count);
-    Shell { cells, offsets, tris, thin }
+    Shell { cells, offsets, tris }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geom::BoxTester;
+    use crate::grid::GridSize;
+    use crate::shapes::torus;
+    use crate::soup::TriangleSoup;
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
@@ -340,6 +363,33 @@ mod tests {
         for ((from, to), last) in cases {
             assert_eq!(last_cell_of(from, to, 10), last, "[{from}, {to}]");
         }
+    }
+
+    #[test]
+    fn thin_cells_are_the_empty_cells_with_a_triangle_whose_normal_neighbours_are_empty() {
+        let soup = TriangleSoup::from_mesh(&torus(2.0, 0.7, 20), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
+        let tris = spec.grid_triangles(&soup);
+        let shell = shell(&spec, &tris);
+        // A scattered fill: about one cell in three, the grid's faces included.
+        let mut fill = BitGrid::new(spec.cell_count());
+        (0..spec.cell_count()).filter(|i| (i * 2654435761) % 97 < 32).for_each(|i| fill.set(i));
+        let empty = |index: Option<usize>| index.is_none_or(|i| !fill.get(i));
+        let expected: Vec<u32> = (0..shell.cells.len())
+            .filter(|&k| {
+                let index = shell.cells[k] as usize;
+                let t = |tri: u32| &tris[tri as usize];
+                let sides = |tri| {
+                    let step = normal_step((t(tri)[1] - t(tri)[0]).cross(t(tri)[2] - t(tri)[0]));
+                    [step, step.map(|s| -s)].map(|s| spec.offset(index, s))
+                };
+                !fill.get(index) && shell.triangles_at(k).iter().any(|&tri| sides(tri).into_iter().all(empty))
+            })
+            .map(|k| shell.cells[k])
+            .collect();
+        let empty_cells = shell.cells.iter().filter(|&&c| !fill.get(c as usize)).count();
+        assert!(expected.len() > 20 && expected.len() + 20 < empty_cells, "{} of {empty_cells}", expected.len());
+        assert_eq!(shell.thin_cells(&spec, &tris, &fill), expected);
     }
 
     #[test]

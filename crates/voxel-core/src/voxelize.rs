@@ -1,4 +1,4 @@
-//! The voxelization pipeline: normalize → fill → shell → combine → colour → (hollow).
+//! The voxelization pipeline: normalize → fill and shell side by side → combine → colour → (hollow).
 
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 use crate::colour_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
+use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSize, GridSpec};
 use crate::radix;
 use crate::shell::{Shell, shell};
@@ -116,11 +117,16 @@ pub fn voxelize_within(
 }
 
 /// The wall time of the passes of one voxelization (for benchmarks).
+///
+/// The fill and the shell run side by side (with two threads or more they overlap, so their sum can exceed
+/// the voxelization's wall time); each is timed from its own start to its own end, which includes any of
+/// the other's work its thread picked up while waiting. Combining the two (the thin cells, the flood fill)
+/// and finding the visible cells count in neither field.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PassTimes {
-    /// Fitting the grid, the grid triangles and the fill.
+    /// Fitting the grid and the grid triangles, then the fill (alongside the shell).
     pub fill: Duration,
-    /// The surface shell.
+    /// The surface shell's cells and their triangles (alongside the fill).
     pub shell: Duration,
     /// The colours of the visible cells.
     pub color: Duration,
@@ -148,19 +154,25 @@ fn voxelize_within_timed(
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
     }
+    let prepared = started.elapsed();
     let bvh = OnceLock::new();
-    let fill = match options.fill {
-        FillMode::Winding | FillMode::Parity => solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh),
-        FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
-    };
-    let filled = Instant::now();
-    let shell = shell(&spec, &tris, &fill);
-    let shelled = Instant::now();
-    let solid = combine(&spec, options, fill, &shell);
+    // The winding fill's part analysis is serial: the other thread builds the shell meanwhile.
+    let ((fill, fill_time), (shell, shell_time)) = rayon::join(
+        || {
+            timed(|| match options.fill {
+                FillMode::Winding | FillMode::Parity => {
+                    solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh)
+                }
+                FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
+            })
+        },
+        || timed(|| shell(&spec, &tris)),
+    );
+    let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
     let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
-    let times = PassTimes { fill: filled - started, shell: shelled - filled, color: coloring.elapsed() };
+    let times = PassTimes { fill: prepared + fill_time, shell: shell_time, color: coloring.elapsed() };
     if options.pastel {
         pastel_all(&mut colors);
     }
@@ -178,6 +190,13 @@ fn voxelize_within_timed(
     Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
 }
 
+/// The result of `f` and how long it took.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
+    let started = Instant::now();
+    let value = f();
+    (value, started.elapsed())
+}
+
 /// The number of distinct values.
 fn distinct(mut values: Vec<u32>) -> usize {
     // Neighbouring cells often share a colour: drop repeats before sorting.
@@ -187,8 +206,8 @@ fn distinct(mut values: Vec<u32>) -> usize {
     values.len()
 }
 
-/// The solid cells from the fill and the shell, per the modes.
-fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell) -> BitGrid {
+/// The solid cells from the fill and the shell of `tris`, per the modes.
+fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &[GridTriangle]) -> BitGrid {
     let shell_bits = || {
         let mut bits = BitGrid::new(spec.cell_count());
         for &c in &shell.cells {
@@ -206,10 +225,8 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
                     }
                 }
                 ShellMode::Auto => {
-                    for (k, &c) in shell.cells.iter().enumerate() {
-                        if shell.thin[k] {
-                            solid.set(c as usize);
-                        }
+                    for c in shell.thin_cells(spec, tris, &solid) {
+                        solid.set(c as usize);
                     }
                 }
                 ShellMode::None => {}

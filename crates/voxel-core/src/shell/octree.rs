@@ -124,7 +124,7 @@ mod tests {
         }
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(24), 1.0, 1 << 26).unwrap();
         let tris = spec.grid_triangles(&soup);
-        let shell = super::super::shell(&spec, &tris, &BitGrid::new(spec.cell_count()));
+        let shell = super::super::shell(&spec, &tris);
         let octree = ShellOctree::new(&spec, &shell);
         let mut tied = 0;
         for k in 0..400u32 {
