@@ -56,6 +56,7 @@ use rayon::prelude::*;
 
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
+use crate::soup::TriangleSoup;
 use edges::{Edges, SAME_DIRECTION, ascends, has_area};
 
 pub(crate) use soup_parts::{SoupParts, closed_parts};
@@ -330,6 +331,31 @@ pub(crate) fn winding_roles(
     roles
 }
 
+/// Analyses `soup`'s closed parts now (the analysis it keeps, [`TriangleSoup::closed_parts`]) when it has none
+/// yet and its facing does not cancel out on the XY plane ([`facing_unbalanced`]): then a winding fill will
+/// very likely need them, and the caller can run this beside work that does not (the grid's set-up). A soup
+/// that the hint misses is analysed when its columns show the need, as before.
+pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup) {
+    if !soup.has_closed_parts() && facing_unbalanced(soup) {
+        soup.closed_parts();
+    }
+}
+
+/// Whether `soup`'s triangles, facing as in the file, fail to cancel out on the XY plane: their areas
+/// projected along the columns, signed by facing, do not add up to zero (beyond rounding). A closed surface's
+/// do, whichever way it faces; an open sheet's, or a closed part's with some horizontal triangles reversed,
+/// usually do not, and then the columns of a fine grid cannot all balance as in the file, so the winding fill
+/// will need the soup's part analysis. Only a hint for starting that analysis before the grid exists: the fill
+/// itself decides by its columns ([`winding_roles`]).
+fn facing_unbalanced(soup: &TriangleSoup) -> bool {
+    let (net, total) = soup.vertices().chunks_exact(3).fold((0.0f64, 0.0f64), |(net, total), t| {
+        let [a, b, c] = [0, 1, 2].map(|k| t[k].position.map(f64::from));
+        let twice_area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        (net + twice_area, total + twice_area.abs())
+    });
+    net.abs() > 1e-9 * total
+}
+
 /// Whether the triangles as they face in the file already wind consistently as far as any column can
 /// tell: in every column the steps add up to zero and the winding number never drops below zero.
 fn consistent_as_in_file(columns: &Columns, roles: &[Role]) -> bool {
@@ -450,6 +476,43 @@ mod tests {
         let mut mixed = hollow.clone();
         mixed.triangles[8].swap(1, 2);
         assert_eq!(roles(&mixed)[20..], r[20..]);
+    }
+
+    #[test]
+    fn the_hint_sees_open_sheets_and_reversed_horizontal_triangles_but_not_closed_surfaces() {
+        let hint = |mesh: &IndexedMesh| facing_unbalanced(&TriangleSoup::from_mesh(mesh, [1.0; 4]));
+        // Closed, facing out or in: the projections cancel.
+        assert!(!hint(&block()) && !hint(&reversed(block(), 1)));
+        // A reversed bottom triangle (the last four are the horizontal faces), or the top missing.
+        let mut bottom = block();
+        bottom.triangles[8].swap(1, 2);
+        let mut open = block();
+        open.triangles.truncate(10);
+        assert!(hint(&bottom) && hint(&open));
+        // A reversed side triangle projects to a line: nothing to see, the columns decide.
+        let mut side = block();
+        side.triangles[0].swap(1, 2);
+        assert!(!hint(&side));
+    }
+
+    #[test]
+    fn a_soup_is_analysed_before_its_grid_only_when_its_facing_does_not_cancel() {
+        use crate::voxelize::{FillMode, VoxelizeOptions, voxelize};
+        let voxelized = |mesh: &IndexedMesh, fill: FillMode| {
+            let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
+            let options = VoxelizeOptions { grid: GridSize::Resolution(8), fill, ..Default::default() };
+            voxelize(&soup, &options).unwrap();
+            soup.has_closed_parts()
+        };
+        // A closed box: its columns balance, nothing is analysed.
+        assert!(!voxelized(&block(), FillMode::Winding));
+        // With a speck of a horizontal triangle beside it, which no column crosses: the columns still balance,
+        // but the projections do not cancel, so the analysis ran beside the grid's set-up (not with parity).
+        let mut speck = block();
+        speck.positions.extend([[3.9, 1.3, 1.7], [3.91, 1.3, 1.7], [3.9, 1.31, 1.7]]);
+        speck.triangles.push([8, 9, 10]);
+        assert!(voxelized(&speck, FillMode::Winding));
+        assert!(!voxelized(&speck, FillMode::Parity));
     }
 
     #[test]

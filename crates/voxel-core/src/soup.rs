@@ -180,6 +180,11 @@ impl TriangleSoup {
         self.closed_parts.get_or_init(|| Arc::new(SoupParts::of(self)))
     }
 
+    /// Whether the soup's closed parts have been found (and its positions not changed since).
+    pub(crate) fn has_closed_parts(&self) -> bool {
+        self.closed_parts.get().is_some()
+    }
+
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.
     pub fn from_mesh(mesh: &crate::shapes::IndexedMesh, base_color: [f32; 4]) -> Self {
         let mut soup = Self::default();

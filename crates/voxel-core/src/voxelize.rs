@@ -8,6 +8,7 @@ use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSize, GridSpec};
+use crate::orient::analyse_parts_if_unbalanced;
 use crate::radix;
 use crate::shell::{Shell, shell};
 use crate::soup::TriangleSoup;
@@ -143,20 +144,23 @@ fn voxelize_within_timed(
     options: &VoxelizeOptions,
     bounds: ([f32; 3], [f32; 3]),
 ) -> Result<(VoxelModel, PassTimes)> {
-    soup.validate()?;
-    if options.fill == FillMode::None && options.shell == ShellMode::None {
-        return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
-    }
     let started = Instant::now();
-    let spec =
-        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
-    let tris = spec.grid_triangles(soup);
-    if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
-        return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
-    }
+    // The winding fill's part analysis depends on the soup alone: when the soup's facing shows that the
+    // columns will not balance, it runs on the other thread while this one checks the soup and places its
+    // triangles on the grid.
+    let (grid, ()) = rayon::join(
+        || prepare(soup, options, bounds),
+        || {
+            if options.fill == FillMode::Winding {
+                analyse_parts_if_unbalanced(soup);
+            }
+        },
+    );
+    let (spec, tris) = grid?;
     let prepared = started.elapsed();
     let bvh = OnceLock::new();
-    // The winding fill's part analysis is serial: the other thread builds the shell meanwhile.
+    // The fill and the shell side by side: a part analysis the hint above did not start runs in the fill,
+    // while the other thread builds the shell.
     let ((fill, fill_time), (shell, shell_time)) = rayon::join(
         || {
             timed(|| match options.fill {
@@ -195,6 +199,25 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
     let started = Instant::now();
     let value = f();
     (value, started.elapsed())
+}
+
+/// Checks `soup` and `options`, fits the grid of `options` to `bounds` and places the soup's triangles on it.
+fn prepare(
+    soup: &TriangleSoup,
+    options: &VoxelizeOptions,
+    bounds: ([f32; 3], [f32; 3]),
+) -> Result<(GridSpec, Vec<GridTriangle>)> {
+    soup.validate()?;
+    if options.fill == FillMode::None && options.shell == ShellMode::None {
+        return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
+    }
+    let spec =
+        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let tris = spec.grid_triangles(soup);
+    if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
+        return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
+    }
+    Ok((spec, tris))
 }
 
 /// The number of distinct values.
