@@ -349,11 +349,15 @@ pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup) {
 /// as in the file, so the winding fill will need the soup's part analysis. Only a hint for starting that
 /// analysis before the grid exists: the fill itself decides by its columns ([`winding_roles`]).
 fn facing_unbalanced(soup: &TriangleSoup) -> bool {
-    let (net, total) = soup.vertices().chunks_exact(3).fold((0.0f64, 0.0f64), |(net, total), t| {
-        let [a, b, c] = [0, 1, 2].map(|k| t[k].position.map(f64::from));
-        let twice_area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-        (net + twice_area, total + twice_area.abs())
-    });
+    let (mut net, mut total) = (0.0f64, 0.0f64);
+    for t in soup.vertices().chunks_exact(3) {
+        let [a, b, c] = [t[0].position, t[1].position, t[2].position];
+        // Differences of nearby f32 coordinates are exact; their products are exact in f64.
+        let d = |p: [f32; 3], axis: usize| f64::from(p[axis] - a[axis]);
+        let twice_area = d(b, 0) * d(c, 1) - d(b, 1) * d(c, 0);
+        net += twice_area;
+        total += twice_area.abs();
+    }
     net.abs() > 1e-5 * total
 }
 
