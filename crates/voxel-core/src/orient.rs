@@ -231,20 +231,23 @@ impl Sheets {
     /// file (on a tie, as its first triangle is). Two triangles walking their shared edge the same way
     /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
     fn of(id: &[u32], partner: &[u32]) -> Self {
-        // Per triangle reached: its sheet << 1 | whether it is reversed relative to the sheet's first triangle.
-        // Not a repeated byte, as `weld`'s empty slot mark.
-        const UNSEEN: u32 = u32::MAX >> 1;
+        // Per triangle reached: its sheet << 1 | whether it is reversed (relative to the sheet's first
+        // triangle during its walk). Even, so not reversed, and NO_PART after an arithmetic shift; not a
+        // repeated byte, as `weld`'s empty slot mark.
+        const UNSEEN: u32 = u32::MAX - 1;
         let mut seen = vec![UNSEEN; id.len() / 3];
-        let (mut open, mut flip, mut stack) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut open, mut stack, mut walked) = (Vec::new(), Vec::new(), Vec::new());
         for first in 0..seen.len() {
             if seen[first] != UNSEEN || !has_area(id, first) {
                 continue;
             }
             let s = open.len() as u32;
-            let (mut size, mut against_first, mut contradiction) = (1u32, 0u32, false);
+            let (mut against_first, mut contradiction) = (0usize, false);
             seen[first] = s << 1;
             stack.push(first as u32);
+            walked.clear();
             while let Some(t) = stack.pop() {
+                walked.push(t);
                 let here = seen[t as usize];
                 for &p in &partner[3 * t as usize..3 * t as usize + 3] {
                     if p == NO_PARTNER {
@@ -254,8 +257,7 @@ impl Sheets {
                     let there = here ^ u32::from(p & SAME_DIRECTION != 0);
                     if seen[u] == UNSEEN {
                         seen[u] = there;
-                        size += 1;
-                        against_first += there & 1;
+                        against_first += (there & 1) as usize;
                         stack.push(u as u32);
                     } else {
                         contradiction |= seen[u] != there;
@@ -263,10 +265,13 @@ impl Sheets {
                 }
             }
             open.push(contradiction);
-            flip.push(2 * against_first > size);
+            // Most of the sheet against its first triangle: the sheet takes their orientation.
+            if 2 * against_first > walked.len() {
+                walked.iter().for_each(|&t| seen[t as usize] ^= 1);
+            }
         }
-        let of = seen.iter().map(|&v| if v == UNSEEN { NO_PART } else { v >> 1 }).collect();
-        let reversed = seen.iter().map(|&v| v != UNSEEN && ((v & 1 != 0) ^ flip[(v >> 1) as usize])).collect();
+        let of = seen.iter().map(|&v| ((v as i32) >> 1) as u32).collect();
+        let reversed = seen.iter().map(|&v| v & 1 != 0).collect();
         Self { of, reversed, open }
     }
 }

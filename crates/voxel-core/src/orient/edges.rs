@@ -14,7 +14,11 @@ fn next(c: u32) -> u32 {
 
 /// Whether triangle `t`'s corners are at three different positions (`id`: each corner's position).
 pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
-    let [a, b, c] = [id[3 * t], id[3 * t + 1], id[3 * t + 2]];
+    apart(id[3 * t], id[3 * t + 1], id[3 * t + 2])
+}
+
+/// Whether the positions `a`, `b` and `c` are three different ones.
+fn apart(a: u32, b: u32, c: u32) -> bool {
     a != b && b != c && c != a
 }
 
@@ -23,7 +27,7 @@ pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
 fn for_each_edge(id: &[u32], mut f: impl FnMut(u32, u32, u32)) {
     for (t, corners) in id.chunks_exact(3).enumerate() {
         let [a, b, c] = [corners[0], corners[1], corners[2]];
-        if has_area(id, t) {
+        if apart(a, b, c) {
             let first = 3 * t as u32;
             f(first, a, b);
             f(first + 1, b, c);
