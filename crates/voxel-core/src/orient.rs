@@ -232,8 +232,8 @@ impl Sheets {
     /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
     fn of(id: &[u32], partner: &[u32]) -> Self {
         // Per triangle reached: its sheet << 1 | whether it is reversed (relative to the sheet's first
-        // triangle during its walk). Even, so not reversed, and NO_PART after an arithmetic shift; not a
-        // repeated byte, as `weld`'s empty slot mark.
+        // triangle during its walk). UNSEEN is even (not reversed) and gives NO_PART when shifted as an i32,
+        // as the sheet number does; it is not a repeated byte, as `weld`'s empty slot mark.
         const UNSEEN: u32 = u32::MAX - 1;
         let mut seen = vec![UNSEEN; id.len() / 3];
         let (mut open, mut stack, mut walked) = (Vec::new(), Vec::new(), Vec::new());

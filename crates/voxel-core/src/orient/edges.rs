@@ -45,8 +45,8 @@ pub(crate) fn ascends(id: &[u32], c: u32) -> bool {
 /// area); not a repeated byte, as `weld`'s empty slot mark.
 pub(crate) const NO_PARTNER: u32 = u32::MAX >> 1;
 
-/// Marks a partner that walks the shared edge in the same direction (the corner numbers are below 2³¹:
-/// three per triangle of a soup in memory).
+/// Marks a partner that walks the shared edge in the same direction (the corner numbers are below 2³¹ − 1,
+/// so never [`NO_PARTNER`]: three per triangle of a soup in memory).
 pub(crate) const SAME_DIRECTION: u32 = 1 << 31;
 
 /// The edges of the triangles with area, by how many corners walk each.

@@ -56,8 +56,9 @@ pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K> 
     hashes_all_different(count, keys.clone().map(|key| key.hash())) || keys_all_different(count, keys)
 }
 
-/// Whether the `count` hashes `hashes` are all different, or maybe not (false also when two differ only in
-/// the last bit and one of them is the table's empty mark): an open-addressing table of the hashes.
+/// Whether the `count` hashes `hashes` are surely all different (false when two are equal, and also when
+/// two differ only in the last bit and one of them is the table's empty mark): an open-addressing table of
+/// the hashes.
 fn hashes_all_different(count: usize, hashes: impl Iterator<Item = u64>) -> bool {
     // Not a repeated byte, as `EMPTY`.
     const UNUSED: u64 = 0x5555_5555_5555_5554;
@@ -172,6 +173,6 @@ mod tests {
         // The empty mark is a hash like any other (told from its neighbour by the keys).
         let near_mark = [Colliding(0x5555_5555_5555_5554, 0), Colliding(0x5555_5555_5555_5555, 0)];
         assert!(all_different(2, near_mark.iter().copied()));
-        assert!(hashes_all_different(2, [1u64 << 63, 1 << 62, 3].into_iter()));
+        assert!(hashes_all_different(3, [1u64 << 63, 1 << 62, 3].into_iter()));
     }
 }
