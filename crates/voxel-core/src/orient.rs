@@ -57,7 +57,7 @@ use rayon::prelude::*;
 use crate::fill::{Columns, parity_counts};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
-use edges::{Edges, SAME_DIRECTION, ascends, has_area};
+use edges::{Edges, NO_PARTNER, SAME_DIRECTION, ascends, has_area};
 
 pub(crate) use soup_parts::{SoupParts, closed_parts};
 
@@ -202,20 +202,20 @@ impl Parts {
                 }
             }
         }
-        let mut part_of_root = vec![NO_PART; open.len()];
-        let mut parts = Self { of: vec![NO_PART; sheet_of.len()], reversed, count: 0 };
-        for (t, &s) in sheet_of.iter().enumerate() {
-            if s == NO_PART || open[s as usize] {
-                continue;
+        // Numbered in order of their first triangle: of their first sheet, which is their root.
+        let mut part_of_sheet = vec![NO_PART; open.len()];
+        let mut count = 0;
+        for s in (0..open.len()).filter(|&s| !open[s]) {
+            let root = union.find(s as u32) as usize;
+            if root == s {
+                part_of_sheet[s] = count;
+                count += 1;
+            } else {
+                part_of_sheet[s] = part_of_sheet[root];
             }
-            let root = union.find(s) as usize;
-            if part_of_root[root] == NO_PART {
-                part_of_root[root] = parts.count as u32;
-                parts.count += 1;
-            }
-            parts.of[t] = part_of_root[root];
         }
-        parts
+        let of = sheet_of.iter().map(|&s| if s == NO_PART { NO_PART } else { part_of_sheet[s as usize] }).collect();
+        Self { of, reversed, count: count as usize }
     }
 }
 
@@ -235,45 +235,48 @@ impl Sheets {
     /// file (on a tie, as its first triangle is). Two triangles walking their shared edge the same way
     /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
     fn of(id: &[u32], partner: &[u32]) -> Self {
-        let n = id.len() / 3;
-        let mut sheets = Self { of: vec![NO_PART; n], reversed: vec![false; n], open: Vec::new() };
-        let mut flip: Vec<bool> = Vec::new();
-        let mut stack: Vec<u32> = Vec::new();
-        for first in 0..n {
-            if sheets.of[first] != NO_PART || !has_area(id, first) {
+        // Per triangle reached: its sheet << 1 | whether it is reversed (relative to the sheet's first
+        // triangle during its walk). UNSEEN is even (not reversed) and gives NO_PART when shifted as an i32,
+        // as the sheet number does; it is not a repeated byte, as `weld`'s empty slot mark.
+        const UNSEEN: u32 = u32::MAX - 1;
+        let mut seen = vec![UNSEEN; id.len() / 3];
+        let (mut open, mut stack, mut walked) = (Vec::new(), Vec::new(), Vec::new());
+        for first in 0..seen.len() {
+            if seen[first] != UNSEEN || !has_area(id, first) {
                 continue;
             }
-            let s = sheets.open.len() as u32;
-            let (mut size, mut against_first, mut contradiction) = (1usize, 0usize, false);
-            sheets.of[first] = s;
+            let s = open.len() as u32;
+            let (mut against_first, mut contradiction) = (0usize, false);
+            seen[first] = s << 1;
             stack.push(first as u32);
+            walked.clear();
             while let Some(t) = stack.pop() {
+                walked.push(t);
+                let here = seen[t as usize];
                 for &p in &partner[3 * t as usize..3 * t as usize + 3] {
-                    if p == NO_PART {
+                    if p == NO_PARTNER {
                         continue;
                     }
                     let u = (p & !SAME_DIRECTION) as usize / 3;
-                    let reversed = sheets.reversed[t as usize] ^ (p & SAME_DIRECTION != 0);
-                    if sheets.of[u] == NO_PART {
-                        sheets.of[u] = s;
-                        sheets.reversed[u] = reversed;
-                        size += 1;
-                        against_first += usize::from(reversed);
+                    let there = here ^ u32::from(p & SAME_DIRECTION != 0);
+                    if seen[u] == UNSEEN {
+                        seen[u] = there;
+                        against_first += (there & 1) as usize;
                         stack.push(u as u32);
                     } else {
-                        contradiction |= sheets.reversed[u] != reversed;
+                        contradiction |= seen[u] != there;
                     }
                 }
             }
-            sheets.open.push(contradiction);
-            flip.push(2 * against_first > size);
-        }
-        for (reversed, &s) in sheets.reversed.iter_mut().zip(&sheets.of) {
-            if s != NO_PART && flip[s as usize] {
-                *reversed = !*reversed;
+            open.push(contradiction);
+            // Most of the sheet against its first triangle: the sheet takes their orientation.
+            if 2 * against_first > walked.len() {
+                walked.iter().for_each(|&t| seen[t as usize] ^= 1);
             }
         }
-        sheets
+        let of = seen.iter().map(|&v| ((v as i32) >> 1) as u32).collect();
+        let reversed = seen.iter().map(|&v| v & 1 != 0).collect();
+        Self { of, reversed, open }
     }
 }
 

@@ -7,8 +7,6 @@
 
 use std::ops::Range;
 
-use super::NO_PART;
-
 /// The corner after `c` in its triangle.
 fn next(c: u32) -> u32 {
     if c % 3 == 2 { c - 2 } else { c + 1 }
@@ -16,7 +14,11 @@ fn next(c: u32) -> u32 {
 
 /// Whether triangle `t`'s corners are at three different positions (`id`: each corner's position).
 pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
-    let [a, b, c] = [id[3 * t], id[3 * t + 1], id[3 * t + 2]];
+    apart(id[3 * t], id[3 * t + 1], id[3 * t + 2])
+}
+
+/// Whether the positions `a`, `b` and `c` are three different ones.
+fn apart(a: u32, b: u32, c: u32) -> bool {
     a != b && b != c && c != a
 }
 
@@ -25,7 +27,7 @@ pub(crate) fn has_area(id: &[u32], t: usize) -> bool {
 fn for_each_edge(id: &[u32], mut f: impl FnMut(u32, u32, u32)) {
     for (t, corners) in id.chunks_exact(3).enumerate() {
         let [a, b, c] = [corners[0], corners[1], corners[2]];
-        if has_area(id, t) {
+        if apart(a, b, c) {
             let first = 3 * t as u32;
             f(first, a, b);
             f(first + 1, b, c);
@@ -39,14 +41,18 @@ pub(crate) fn ascends(id: &[u32], c: u32) -> bool {
     id[c as usize] < id[next(c) as usize]
 }
 
-/// Marks a partner that walks the shared edge in the same direction (the corner numbers are below 2³¹:
-/// three per triangle of a soup in memory).
+/// The partner of a corner without one (alone on its edge, on a non-manifold edge, or in a triangle without
+/// area); not a repeated byte, as `weld`'s empty slot mark.
+pub(crate) const NO_PARTNER: u32 = u32::MAX >> 1;
+
+/// Marks a partner that walks the shared edge in the same direction (the corner numbers are below 2³¹ − 1,
+/// so never [`NO_PARTNER`]: three per triangle of a soup in memory).
 pub(crate) const SAME_DIRECTION: u32 = 1 << 31;
 
 /// The edges of the triangles with area, by how many corners walk each.
 pub(crate) struct Edges {
     /// Each corner's partner on a manifold edge (walked by exactly two corners), or'ed with
-    /// [`SAME_DIRECTION`] when both walk it the same way; else [`NO_PART`].
+    /// [`SAME_DIRECTION`] when both walk it the same way; else [`NO_PARTNER`].
     pub partner: Vec<u32>,
     /// Corners alone on their edge (a border).
     pub border: Vec<u32>,
@@ -76,7 +82,7 @@ impl Edges {
         });
         // `start[p]` is now the end of bucket p, the start of bucket p + 1.
         let mut found =
-            Self { partner: vec![NO_PART; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
+            Self { partner: vec![NO_PARTNER; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
         let mut from = 0;
         for &end in &start[..positions] {
             found.pair(&mut bucketed[from as usize..end as usize]);
@@ -137,8 +143,8 @@ mod tests {
         assert_eq!((edges.partner[1], edges.partner[9]), (9, 1));
         // Two triangles walking an edge the same way (one of them reversed).
         let same = Edges::of(&[0, 1, 2, 0, 1, 3], 4);
-        assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PART, NO_PART, SAME_DIRECTION]);
-        assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PART).count(), 2);
+        assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PARTNER, NO_PARTNER, SAME_DIRECTION]);
+        assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PARTNER).count(), 2);
         let mut border = edges.border.clone();
         border.sort_unstable();
         assert_eq!(border, [2, 4, 5, 7, 8, 10, 11]);

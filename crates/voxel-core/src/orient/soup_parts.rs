@@ -35,7 +35,8 @@ impl SoupParts {
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
     fn kept_apart_by(&self, tris: &[GridTriangle]) -> bool {
-        let on_grid = self.first.iter().map(|&c| grid_key(tris[c as usize / 3][c as usize % 3]));
+        let corners = tris.as_flattened();
+        let on_grid = self.first.iter().map(|&c| grid_key(corners[c as usize]));
         all_different(self.first.len(), on_grid)
     }
 }

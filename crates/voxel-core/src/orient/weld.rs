@@ -40,14 +40,51 @@ impl Key for [u64; 3] {
     }
 }
 
+/// The mark of an empty slot in a table of position numbers: not a repeated byte, so a new table is filled
+/// by wide stores rather than a byte-wise `memset` (whose every byte counts as an instruction under
+/// valgrind, in whose counts the analysis is measured).
+const EMPTY: u32 = u32::MAX >> 1;
+
 /// The number of slot bits of an open-addressing table for `count` keys (at most two-thirds full).
 fn table_bits(count: usize) -> u32 {
     (count + count / 2).next_power_of_two().max(2).ilog2()
 }
 
+/// Whether the `count` keys `keys` are all different: first by their hashes alone (keys with different
+/// hashes differ), then, only when two hashes agree, by the keys themselves.
+pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K> + Clone) -> bool {
+    hashes_all_different(count, keys.clone().map(|key| key.hash())) || keys_all_different(count, keys)
+}
+
+/// Whether the `count` hashes `hashes` are surely all different (false when two are equal, and also when
+/// two differ only in the last bit and one of them is the table's empty mark): an open-addressing table of
+/// the hashes.
+fn hashes_all_different(count: usize, hashes: impl Iterator<Item = u64>) -> bool {
+    // Not a repeated byte, as `EMPTY`.
+    const UNUSED: u64 = 0x5555_5555_5555_5554;
+    let bits = table_bits(count);
+    let mut slots = vec![UNUSED; 1 << bits];
+    let mask = slots.len() - 1;
+    for hash in hashes {
+        let hash = if hash == UNUSED { hash ^ 1 } else { hash };
+        let mut slot = (hash >> (64 - bits)) as usize;
+        loop {
+            match slots[slot] {
+                UNUSED => {
+                    slots[slot] = hash;
+                    break;
+                }
+                other if other == hash => return false,
+                _ => slot = (slot + 1) & mask,
+            }
+        }
+    }
+    true
+}
+
 /// Whether the `count` keys `keys` are all different: an open-addressing table of the keys themselves,
 /// left at the first repeat.
-pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
+fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
     let bits = table_bits(count);
     let mut slots: Vec<Option<K>> = vec![None; 1 << bits];
     let mask = slots.len() - 1;
@@ -72,15 +109,16 @@ pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>)
 /// hash only picks where to look first), each position's key kept once, densely.
 pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
     let bits = table_bits(count);
-    let mut slots = vec![u32::MAX; 1 << bits];
+    let mut slots = vec![EMPTY; 1 << bits];
     let mask = slots.len() - 1;
-    let mut distinct: Vec<K> = Vec::new();
-    let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::new() };
+    // Room for a position per four corners (a closed surface has one per six).
+    let mut distinct: Vec<K> = Vec::with_capacity(count / 4);
+    let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::with_capacity(count / 4) };
     for (c, key) in keys.enumerate() {
         let mut slot = (key.hash() >> (64 - bits)) as usize;
         let id = loop {
             match slots[slot] {
-                u32::MAX => {
+                EMPTY => {
                     let id = distinct.len() as u32;
                     slots[slot] = id;
                     distinct.push(key);
@@ -114,5 +152,27 @@ mod tests {
         let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
         assert!(all_different(welded.first.len(), firsts.clone()));
         assert!(!all_different(welded.first.len() + 1, firsts.clone().chain([grid_key(many[5_000])])));
+    }
+
+    /// A key whose hash is its first part: different keys with equal hashes.
+    #[derive(Clone, Copy, PartialEq, Eq)]
+    struct Colliding(u64, u64);
+
+    impl Key for Colliding {
+        fn hash(&self) -> u64 {
+            self.0
+        }
+    }
+
+    #[test]
+    fn keys_with_equal_hashes_are_told_apart_by_the_keys() {
+        let distinct = [Colliding(7, 1), Colliding(7, 2), Colliding(9, 1)];
+        assert!(!hashes_all_different(3, distinct.iter().map(Key::hash)));
+        assert!(all_different(3, distinct.iter().copied()));
+        assert!(!all_different(4, distinct.iter().copied().chain([Colliding(7, 2)])));
+        // The empty mark is a hash like any other (told from its neighbour by the keys).
+        let near_mark = [Colliding(0x5555_5555_5555_5554, 0), Colliding(0x5555_5555_5555_5555, 0)];
+        assert!(all_different(2, near_mark.iter().copied()));
+        assert!(hashes_all_different(3, [1u64 << 63, 1 << 62, 3].into_iter()));
     }
 }
