@@ -288,7 +288,7 @@ pub(crate) fn solid_fill(
     };
     let roles = match fill {
         FillMode::Winding => {
-            winding_roles(tris, columns.as_ref(), || crossings_by_rasterizing(spec, tris), || closed_parts(soup, tris))
+            winding_roles(columns.as_ref(), || crossings_by_rasterizing(spec, tris), || closed_parts(soup, tris))
         }
         _ => vec![Role::Parity; tris.len()],
     };

@@ -52,6 +52,7 @@ mod weld;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::fill::{Columns, parity_counts};
@@ -139,13 +140,30 @@ pub(crate) struct Parts {
     reversed: Vec<bool>,
     /// The number of closed parts.
     count: usize,
+    /// Per closed part: whether it faces inwards (its signed volume, its sheets oriented, is negative).
+    inward: Vec<bool>,
 }
 
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
         let welded = weld::weld(3 * tris.len(), tris.iter().flatten().map(|&v| weld::grid_key(v)));
-        Self::of_welded(&welded.id, welded.first.len())
+        Self::of_welded(&welded.id, welded.first.len()).with_facing(|t| tris[t])
+    }
+
+    /// Finds which way each closed part faces from the corners of its triangles (`corners` of triangle `t`,
+    /// from any origin: a closed surface's signed volume does not depend on it).
+    pub(crate) fn with_facing(mut self, corners: impl Fn(usize) -> [DVec3; 3]) -> Self {
+        let mut volume = vec![0.0f64; self.count];
+        for (t, (&part, &reversed)) in self.of.iter().zip(&self.reversed).enumerate() {
+            if part != NO_PART {
+                let [a, b, c] = corners(t);
+                let det = a.dot(b.cross(c));
+                volume[part as usize] += if reversed { -det } else { det };
+            }
+        }
+        self.inward = volume.iter().map(|&v| v < 0.0).collect();
+        self
     }
 
     /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
@@ -215,7 +233,7 @@ impl Parts {
             }
         }
         let of = sheet_of.iter().map(|&s| if s == NO_PART { NO_PART } else { part_of_sheet[s as usize] }).collect();
-        Self { of, reversed, count: count as usize }
+        Self { of, reversed, count: count as usize, inward: Vec::new() }
     }
 }
 
@@ -282,10 +300,9 @@ impl Sheets {
 
 /// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
 /// model's column crossings when the caller has them; otherwise `crossings` computes them. `closed_parts`
-/// gives the closed parts of `tris` ([`Parts::find`], or [`closed_parts`] reusing a soup's), when the
+/// gives the closed parts of the triangles ([`Parts::find`], or [`closed_parts`] reusing a soup's), when the
 /// triangles as in the file do not do.
 pub(crate) fn winding_roles(
-    tris: &[GridTriangle],
     columns: Option<&Columns>,
     crossings: impl FnOnce() -> Columns,
     closed_parts: impl FnOnce() -> Arc<Parts>,
@@ -303,17 +320,7 @@ pub(crate) fn winding_roles(
         return as_in_file;
     }
     let parts = closed_parts();
-    // Signed volume (×6) of each closed part with its sheets oriented as in the file.
-    let mut volume = vec![0.0f64; parts.count];
-    for (t, tri) in tris.iter().enumerate() {
-        if parts.of[t] != NO_PART {
-            let [a, b, c] = *tri;
-            let det = a.dot(b.cross(c));
-            volume[parts.of[t] as usize] += if parts.reversed[t] { -det } else { det };
-        }
-    }
-    // Facing inwards in the file: a negative volume.
-    let inward: Vec<bool> = volume.iter().map(|&v| v < 0.0).collect();
+    let inward = &parts.inward;
     let mut roles = as_in_file;
     for ((role, &part), &reversed) in roles.iter_mut().zip(&parts.of).zip(&parts.reversed) {
         *role = match part {
@@ -325,7 +332,7 @@ pub(crate) fn winding_roles(
     if !inward.contains(&true) {
         return roles;
     }
-    let exposed = exposed_parts(columns, &roles, &parts.of, &inward);
+    let exposed = exposed_parts(columns, &roles, &parts.of, inward);
     for (t, role) in roles.iter_mut().enumerate() {
         if parts.of[t] != NO_PART && exposed[parts.of[t] as usize] {
             *role = role.reversed();
@@ -411,8 +418,6 @@ fn exposed_parts(columns: &Columns, roles: &[Role], part_of: &[u32], inward: &[b
 
 #[cfg(test)]
 mod tests {
-    use glam::DVec3;
-
     use super::*;
     use crate::fill::crossings_by_rasterizing;
     use crate::grid::{GridSize, GridSpec};
@@ -428,7 +433,7 @@ mod tests {
         let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(4), 1.0, 1 << 20).unwrap();
         let tris = spec.grid_triangles(&soup);
-        winding_roles(&tris, None, || crossings_by_rasterizing(&spec, &tris), || Arc::new(Parts::find(&tris)))
+        winding_roles(None, || crossings_by_rasterizing(&spec, &tris), || Arc::new(Parts::find(&tris)))
     }
 
     fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {

@@ -11,6 +11,8 @@
 
 use std::sync::Arc;
 
+use glam::DVec3;
+
 use super::Parts;
 use super::weld::{all_different, grid_key, soup_key, weld};
 use crate::geom::GridTriangle;
@@ -30,7 +32,12 @@ impl SoupParts {
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
         let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
-        Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
+        // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
+        // lose its volume to rounding.
+        let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
+        let parts = Parts::of_welded(&welded.id, welded.first.len())
+            .with_facing(|t| [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin));
+        Self { parts: Arc::new(parts), first: welded.first }
     }
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
@@ -39,6 +46,11 @@ impl SoupParts {
         let on_grid = self.first.iter().map(|&c| grid_key(corners[c as usize]));
         all_different(self.first.len(), on_grid)
     }
+}
+
+/// A soup position in f64.
+fn position(p: [f32; 3]) -> DVec3 {
+    DVec3::from(p.map(f64::from))
 }
 
 /// The closed parts of `tris`, the triangles of `soup` on a grid: the soup's own when the grid keeps its
