@@ -176,6 +176,8 @@ impl TriangleSoup {
     }
 
     /// The closed parts of the soup's positions (the winding fill's part analysis), found on the first call.
+    /// A voxelization may start it on one thread while another waits for it here, so the analysis must not wait
+    /// for the thread pool (it runs no rayon tasks): a thread blocked here then never holds work it needs.
     pub(crate) fn closed_parts(&self) -> &SoupParts {
         self.closed_parts.get_or_init(|| Arc::new(SoupParts::of(self)))
     }

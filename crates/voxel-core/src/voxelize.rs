@@ -145,38 +145,40 @@ fn voxelize_within_timed(
     bounds: ([f32; 3], [f32; 3]),
 ) -> Result<(VoxelModel, PassTimes)> {
     let started = Instant::now();
+    let bvh = OnceLock::new();
     // The winding fill's part analysis depends on the soup alone: when the soup's facing shows that the
-    // columns will not balance, it runs on the other thread while this one checks the soup and places its
-    // triangles on the grid.
-    let (grid, ()) = rayon::join(
-        || prepare(soup, options, bounds),
+    // columns will not balance, it starts at once on the other thread, beside the grid's set-up and the shell,
+    // and the fill waits for it only if it gets there first. Otherwise the fill runs it if its columns show the
+    // need, beside the shell.
+    let (passes, ()) = rayon::join(
+        || -> Result<_> {
+            let (spec, tris) = prepare(soup, options, bounds)?;
+            let prepared = started.elapsed();
+            let ((shell, shell_time), (fill, fill_time)) = rayon::join(
+                || timed(|| shell(&spec, &tris)),
+                || {
+                    timed(|| match options.fill {
+                        FillMode::Winding | FillMode::Parity => {
+                            solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh)
+                        }
+                        FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
+                    })
+                },
+            );
+            Ok((spec, tris, fill, shell, prepared + fill_time, shell_time))
+        },
         || {
             if options.fill == FillMode::Winding {
                 analyse_parts_if_unbalanced(soup);
             }
         },
     );
-    let (spec, tris) = grid?;
-    let prepared = started.elapsed();
-    let bvh = OnceLock::new();
-    // The fill and the shell side by side: a part analysis the hint above did not start runs in the fill,
-    // while the other thread builds the shell.
-    let ((fill, fill_time), (shell, shell_time)) = rayon::join(
-        || {
-            timed(|| match options.fill {
-                FillMode::Winding | FillMode::Parity => {
-                    solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh)
-                }
-                FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
-            })
-        },
-        || timed(|| shell(&spec, &tris)),
-    );
+    let (spec, tris, fill, shell, fill_time, shell_time) = passes?;
     let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
     let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
-    let times = PassTimes { fill: prepared + fill_time, shell: shell_time, color: coloring.elapsed() };
+    let times = PassTimes { fill: fill_time, shell: shell_time, color: coloring.elapsed() };
     if options.pastel {
         pastel_all(&mut colors);
     }
