@@ -20,8 +20,8 @@
 //! times; nothing else runs, so under cachegrind (as for `fill-runs`) (Ir at N − Ir at 0) / N is one
 //! voxelization's instructions.
 //!
-//! `cargo bench -p voxel-core --bench voxelize -- first-runs NAME R N` voxelizes the first model whose name
-//! contains NAME at R (or `default`) N times with the parity and N times with the winding fill, interleaved,
+//! `cargo bench -p voxel-core --bench voxelize -- first-runs NAME R N [hollow]` voxelizes the first model whose
+//! name contains NAME at R (or `default`) N times with the parity and N times with the winding fill, interleaved,
 //! each run on a fresh copy of the soup (so every winding run pays the soup's part analysis, as the one-shot
 //! CLI does), and prints the median and the minimum wall time of each (only the voxelize call is timed) and
 //! their ratios.
@@ -135,8 +135,8 @@ fn grid_arg(r: &str) -> GridSize {
 
 /// Prints the median wall time of `runs` first parity and first winding voxelizations of `soup` at `r`
 /// (interleaved, each on a fresh copy of the soup that knows nothing of its parts yet) and their ratio.
-fn print_first_runs(name: &str, soup: &TriangleSoup, r: &str, runs: usize) {
-    let options = |fill| VoxelizeOptions { grid: grid_arg(r), fill, ..Default::default() };
+fn print_first_runs(name: &str, soup: &TriangleSoup, r: &str, runs: usize, hollow: bool) {
+    let options = |fill| VoxelizeOptions { grid: grid_arg(r), fill, hollow, ..Default::default() };
     let (parity, winding) = (options(FillMode::Parity), options(FillMode::Winding));
     let run = |options: &VoxelizeOptions| {
         let mut fresh = soup.clone();
@@ -151,8 +151,9 @@ fn print_first_runs(name: &str, soup: &TriangleSoup, r: &str, runs: usize) {
     let (parity_min, winding_min) = (min_ms(&parity_ms), min_ms(&winding_ms));
     let (parity_ms, winding_ms) = (median_ms(parity_ms), median_ms(winding_ms));
     println!(
-        "{name} R={r}: parity {parity_ms:.2} ms, first winding {winding_ms:.2} ms, ratio {:.3} (medians of {runs}); \
+        "{name} R={r}{}: parity {parity_ms:.2} ms, first winding {winding_ms:.2} ms, ratio {:.3} (medians of {runs}); \
          minima {parity_min:.2} / {winding_min:.2} ms, ratio {:.3}",
+        if hollow { " hollow" } else { "" },
         winding_ms / parity_ms,
         winding_min / parity_min
     );
@@ -211,7 +212,8 @@ fn main() {
         let [name, r, n] = [1, 2, 3].map(|k| args.get(at + k).expect("first-runs NAME R N").as_str());
         let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
         let soup = load_file(file).expect("load");
-        print_first_runs(name, &soup, r, n.parse().expect("N"));
+        let hollow = args.get(at + 4).is_some_and(|a| a == "hollow");
+        print_first_runs(name, &soup, r, n.parse().expect("N"), hollow);
         return;
     }
     if let Some(at) = args.iter().position(|a| a == "pass-runs") {
