@@ -21,7 +21,7 @@ pub(crate) fn soup_key(p: [f32; 3]) -> [u32; 3] {
 }
 
 /// A position key whose bits a multiplicative hash spreads over its top bits.
-pub(crate) trait Key: Copy + Eq {
+pub(crate) trait Key: Copy + Eq + Default {
     /// The key's hash: its top bits pick the slot.
     fn hash(&self) -> u64;
 }
@@ -105,33 +105,80 @@ fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bo
 }
 
 /// Welds corners by their keys, given in corner order (`count` of them): one pass through an
-/// open-addressing table of position numbers, at most two-thirds full; equal keys are found exactly (the
-/// hash only picks where to look first), each position's key kept once, densely.
+/// open-addressing table that holds each position's key with its number (so a probe reads one slot), at most
+/// two-thirds full; equal keys are found exactly (the hash only picks where to look first).
 pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
-    let bits = table_bits(count);
-    let mut slots = vec![EMPTY; 1 << bits];
-    let mask = slots.len() - 1;
-    // Room for a position per four corners (a closed surface has one per six).
-    let mut distinct: Vec<K> = Vec::with_capacity(count / 4);
-    let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::with_capacity(count / 4) };
-    for (c, key) in keys.enumerate() {
-        let mut slot = (key.hash() >> (64 - bits)) as usize;
-        let id = loop {
-            match slots[slot] {
-                EMPTY => {
-                    let id = distinct.len() as u32;
-                    slots[slot] = id;
-                    distinct.push(key);
-                    welded.first.push(c as u32);
-                    break id;
-                }
-                id if distinct[id as usize] == key => break id,
-                _ => slot = (slot + 1) & mask,
-            }
-        };
-        welded.id.push(id);
+    let mut table = Table::with_room(count / 2);
+    let id = keys.enumerate().map(|(c, key)| table.number(key, c as u32)).collect();
+    Welded { id, first: table.first }
+}
+
+/// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
+#[derive(Clone, Copy)]
+struct Slot<K> {
+    key: K,
+    id: u32,
+}
+
+/// The welding table: the positions seen so far, by key.
+struct Table<K> {
+    slots: Vec<Slot<K>>,
+    /// The number of slot bits.
+    bits: u32,
+    /// The first corner at each position, by number.
+    first: Vec<u32>,
+}
+
+impl<K: Key> Table<K> {
+    /// An empty table with room for `positions` positions (it grows when it needs more).
+    fn with_room(positions: usize) -> Self {
+        let bits = table_bits(positions);
+        let slots = vec![Slot { key: K::default(), id: EMPTY }; 1 << bits];
+        Self { slots, bits, first: Vec::with_capacity(positions) }
     }
-    welded
+
+    /// The number of the position `key`, first seen at `corner` when it is new.
+    fn number(&mut self, key: K, corner: u32) -> u32 {
+        let mask = self.slots.len() - 1;
+        let mut slot = (key.hash() >> (64 - self.bits)) as usize;
+        loop {
+            let here = self.slots[slot];
+            if here.id == EMPTY {
+                return self.insert(slot, key, corner);
+            }
+            if here.key == key {
+                return here.id;
+            }
+            slot = (slot + 1) & mask;
+        }
+    }
+
+    /// Numbers the new position `key` (first seen at `corner`) in the empty slot `slot`, then keeps the table
+    /// at most two-thirds full.
+    #[cold]
+    fn insert(&mut self, slot: usize, key: K, corner: u32) -> u32 {
+        let id = self.first.len() as u32;
+        self.slots[slot] = Slot { key, id };
+        self.first.push(corner);
+        if 3 * self.first.len() > 2 * self.slots.len() {
+            self.grow();
+        }
+        id
+    }
+
+    /// Doubles the table, keeping every position's number.
+    fn grow(&mut self) {
+        let old = std::mem::replace(&mut self.slots, vec![Slot { key: K::default(), id: EMPTY }; 2 << self.bits]);
+        self.bits += 1;
+        let mask = self.slots.len() - 1;
+        for here in old.into_iter().filter(|s| s.id != EMPTY) {
+            let mut slot = (here.key.hash() >> (64 - self.bits)) as usize;
+            while self.slots[slot].id != EMPTY {
+                slot = (slot + 1) & mask;
+            }
+            self.slots[slot] = here;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -155,7 +202,7 @@ mod tests {
     }
 
     /// A key whose hash is its first part: different keys with equal hashes.
-    #[derive(Clone, Copy, PartialEq, Eq)]
+    #[derive(Clone, Copy, Default, PartialEq, Eq)]
     struct Colliding(u64, u64);
 
     impl Key for Colliding {
