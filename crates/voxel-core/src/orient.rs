@@ -144,7 +144,7 @@ pub(crate) struct Parts {
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
-        let welded = weld::weld(3 * tris.len(), tris.iter().flatten().map(|&v| weld::grid_key(v)));
+        let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
         Self::of_welded(&welded.id, welded.first.len())
     }
 

@@ -28,8 +28,7 @@ pub(crate) struct SoupParts {
 impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
-        let corners = soup.vertices();
-        let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
+        let welded = weld(soup.vertices(), |v| soup_key(v.position));
         Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
     }
 

@@ -104,12 +104,15 @@ fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bo
     true
 }
 
-/// Welds corners by their keys, given in corner order (`count` of them): one pass through an
-/// open-addressing table that holds each position's key with its number (so a probe reads one slot), at most
-/// two-thirds full; equal keys are found exactly (the hash only picks where to look first).
-pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
-    let mut table = Table::with_room(count / 2);
-    let id = keys.enumerate().map(|(c, key)| table.number(key, c as u32)).collect();
+/// Welds corners (`corners`, in order) by their keys (`key`): one pass through an open-addressing table that
+/// holds each position's key with its number (so a probe reads one slot), at most two-thirds full; equal keys
+/// are found exactly (the hash only picks where to look first).
+pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
+    let mut table = Table::with_room(corners.len() / 2);
+    let mut id = vec![0; corners.len()];
+    for (c, (corner, id)) in corners.iter().zip(&mut id).enumerate() {
+        *id = table.number(key(corner), c as u32);
+    }
     Welded { id, first: table.first }
 }
 
@@ -155,7 +158,6 @@ impl<K: Key> Table<K> {
 
     /// Numbers the new position `key` (first seen at `corner`) in the empty slot `slot`, then keeps the table
     /// at most two-thirds full.
-    #[cold]
     fn insert(&mut self, slot: usize, key: K, corner: u32) -> u32 {
         let id = self.first.len() as u32;
         self.slots[slot] = Slot { key, id };
@@ -167,6 +169,7 @@ impl<K: Key> Table<K> {
     }
 
     /// Doubles the table, keeping every position's number.
+    #[cold]
     fn grow(&mut self) {
         let old = std::mem::replace(&mut self.slots, vec![Slot { key: K::default(), id: EMPTY }; 2 << self.bits]);
         self.bits += 1;
@@ -188,11 +191,11 @@ mod tests {
     #[test]
     fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
         let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
-        let welded = weld(corners.len(), corners.iter().map(|&p| soup_key(p)));
+        let welded = weld(&corners, |&p| soup_key(p));
         assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
         // Many keys, few distinct: the table's probing finds every repeat.
         let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
-        let welded = weld(many.len(), many.iter().map(|&p| grid_key(p)));
+        let welded = weld(&many, |&p| grid_key(p));
         assert_eq!(welded.first.len(), 97 * 89);
         assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
         // The same keys, once each, are all different; with one repeat, not.
