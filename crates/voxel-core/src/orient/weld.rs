@@ -198,6 +198,11 @@ mod tests {
         let welded = weld(&many, |&p| grid_key(p));
         assert_eq!(welded.first.len(), 97 * 89);
         assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
+        // More positions than the table first makes room for (a position per two corners): it grows.
+        let line: Vec<DVec3> = (0..20_000).map(|i| DVec3::new(f64::from(i % 15_000), 0.5, 1.0)).collect();
+        let grown = weld(&line, |&p| grid_key(p));
+        assert_eq!(grown.first, (0..15_000).collect::<Vec<u32>>());
+        assert!(grown.id.iter().enumerate().all(|(c, &id)| id == c as u32 % 15_000));
         // The same keys, once each, are all different; with one repeat, not.
         let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
         assert!(all_different(welded.first.len(), firsts.clone()));
