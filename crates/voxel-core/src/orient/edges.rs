@@ -165,8 +165,8 @@ impl Edges {
 
     /// Makes the corners of entries `a` and `b` partners on their edge.
     fn partners(&mut self, a: u64, b: u64) {
-        // Both walk it from the same end.
-        let same = if (a ^ b) & 1 == 0 { SAME_DIRECTION } else { 0 };
+        // Both walk it from the same end: their last bits agree.
+        let same = ((a ^ b ^ 1) as u32 & 1) * SAME_DIRECTION;
         self.partner[corner(a) as usize] = corner(b) | same;
         self.partner[corner(b) as usize] = corner(a) | same;
     }

@@ -111,7 +111,11 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
     let mut table = Table::with_room(corners.len() / 2);
     let mut id = vec![0; corners.len()];
     for (c, (corner, id)) in corners.iter().zip(&mut id).enumerate() {
-        *id = table.number(key(corner), c as u32);
+        let key = key(corner);
+        *id = match table.find(key) {
+            Ok(id) => id,
+            Err(empty) => table.insert(empty, key, c as u32),
+        };
     }
     Welded { id, first: table.first }
 }
@@ -140,17 +144,17 @@ impl<K: Key> Table<K> {
         Self { slots, bits, first: Vec::with_capacity(positions) }
     }
 
-    /// The number of the position `key`, first seen at `corner` when it is new.
-    fn number(&mut self, key: K, corner: u32) -> u32 {
+    /// The number of the position `key`, or the empty slot where it goes.
+    fn find(&self, key: K) -> Result<u32, usize> {
         let mask = self.slots.len() - 1;
         let mut slot = (key.hash() >> (64 - self.bits)) as usize;
         loop {
             let here = self.slots[slot];
             if here.id == EMPTY {
-                return self.insert(slot, key, corner);
+                return Err(slot);
             }
             if here.key == key {
-                return here.id;
+                return Ok(here.id);
             }
             slot = (slot + 1) & mask;
         }
@@ -158,6 +162,7 @@ impl<K: Key> Table<K> {
 
     /// Numbers the new position `key` (first seen at `corner`) in the empty slot `slot`, then keeps the table
     /// at most two-thirds full.
+    #[cold]
     fn insert(&mut self, slot: usize, key: K, corner: u32) -> u32 {
         let id = self.first.len() as u32;
         self.slots[slot] = Slot { key, id };
