@@ -145,14 +145,14 @@ impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
         let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
-        Self::of_welded(&welded.id, welded.first.len())
+        Self::of_welded(&welded.id, &welded.corners_at)
     }
 
     /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
-    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle
+    /// (`corners_at[p]` corners at position `p`). Depends only on which corners share a position and on the triangle
     /// order: ties and non-manifold edges are decided in triangle and corner order.
-    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
-        let edges = Edges::of(id, positions);
+    pub(crate) fn of_welded(id: &[u32], corners_at: &[u32]) -> Self {
+        let edges = Edges::of(id, corners_at);
         let mut sheets = Sheets::of(id, &edges.partner);
         for &c in &edges.border {
             let s = sheets.of[c as usize / 3] as usize;

@@ -77,18 +77,20 @@ struct Buckets {
 }
 
 impl Buckets {
-    /// Empty buckets for the triangles' edges (three corners per triangle, `id` their positions, below
-    /// `positions`).
-    fn for_corners(id: &[u32], positions: usize) -> Self {
-        let mut start = vec![0u32; positions + 1];
-        for &p in id {
-            start[p as usize] += 2;
-        }
+    /// Empty buckets for the edges of triangles with `corners_at[p]` corners at each position `p`.
+    fn for_corners(corners_at: &[u32]) -> Self {
+        // Each bucket's start: twice the corners before it.
         let mut total = 0;
-        for s in &mut start {
-            (*s, total) = (total, total + *s);
-        }
-        Self { entries: vec![0; total as usize], next: start[..positions].to_vec(), start }
+        let start: Vec<u32> = corners_at
+            .iter()
+            .chain([&0])
+            .map(|&n| {
+                let start = total;
+                total += 2 * n;
+                start
+            })
+            .collect();
+        Self { entries: vec![0; total as usize], next: start[..corners_at.len()].to_vec(), start }
     }
 
     /// Adds `entry` to bucket `p`.
@@ -118,10 +120,11 @@ pub(crate) struct Edges {
 }
 
 impl Edges {
-    /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
-    /// there are) by the edge they walk, leaving out triangles without area.
-    pub(crate) fn of(id: &[u32], positions: usize) -> Self {
-        let mut bucketed = Buckets::for_corners(id, positions);
+    /// Groups the corners of the triangles (three per triangle, `id` their positions, `corners_at` how many
+    /// corners are at each position) by the edge they walk, leaving out triangles without area.
+    pub(crate) fn of(id: &[u32], corners_at: &[u32]) -> Self {
+        let positions = corners_at.len();
+        let mut bucketed = Buckets::for_corners(corners_at);
         for_each_edge(id, |c, a, b| bucketed.push(a.min(b), entry(c, a, b)));
         let mut found =
             Self { partner: vec![NO_PARTNER; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
@@ -188,16 +191,21 @@ impl Edges {
 mod tests {
     use super::*;
 
+    /// The number of corners at each of the `positions` positions `id`.
+    fn corners_at(id: &[u32], positions: usize) -> Vec<u32> {
+        (0..positions as u32).map(|p| id.iter().filter(|&&i| i == p).count() as u32).collect()
+    }
+
     #[test]
     fn corners_are_grouped_by_the_edge_they_walk() {
         // Three triangles on the edge 0–1 (one walking it the other way), a fourth sharing 1–2 with the first,
         // and a degenerate one (positions 3, 3, 4) left out.
         let id = [0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 1, 5, 3, 3, 4];
-        let edges = Edges::of(&id, 6);
+        let edges = Edges::of(&id, &corners_at(&id, 6));
         assert_eq!(edges.non_manifold().collect::<Vec<_>>(), [&[0, 3, 6][..]]);
         assert_eq!((edges.partner[1], edges.partner[9]), (9, 1));
         // Two triangles walking an edge the same way (one of them reversed).
-        let same = Edges::of(&[0, 1, 2, 0, 1, 3], 4);
+        let same = Edges::of(&[0, 1, 2, 0, 1, 3], &[2, 2, 1, 1]);
         assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PARTNER, NO_PARTNER, SAME_DIRECTION]);
         assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PARTNER).count(), 2);
         let mut border = edges.border.clone();

@@ -29,7 +29,7 @@ impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let welded = weld(soup.vertices(), |v| soup_key(v.position));
-        Self { parts: Arc::new(Parts::of_welded(&welded.id, welded.first.len())), first: welded.first }
+        Self { parts: Arc::new(Parts::of_welded(&welded.id, &welded.corners_at)), first: welded.first }
     }
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.

@@ -8,6 +8,8 @@ pub(crate) struct Welded {
     pub id: Vec<u32>,
     /// The first corner at each position.
     pub first: Vec<u32>,
+    /// The number of corners at each position.
+    pub corners_at: Vec<u32>,
 }
 
 /// A grid-space position's key (−0 and +0 alike).
@@ -116,8 +118,9 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
             Ok(id) => id,
             Err(empty) => table.insert(empty, key, c as u32),
         };
+        table.corners_at[*id as usize] += 1;
     }
-    Welded { id, first: table.first }
+    Welded { id, first: table.first, corners_at: table.corners_at }
 }
 
 /// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
@@ -134,6 +137,8 @@ struct Table<K> {
     bits: u32,
     /// The first corner at each position, by number.
     first: Vec<u32>,
+    /// The number of corners at each position so far, by number.
+    corners_at: Vec<u32>,
 }
 
 impl<K: Key> Table<K> {
@@ -141,7 +146,7 @@ impl<K: Key> Table<K> {
     fn with_room(positions: usize) -> Self {
         let bits = table_bits(positions);
         let slots = vec![Slot { key: K::default(), id: EMPTY }; 1 << bits];
-        Self { slots, bits, first: Vec::with_capacity(positions) }
+        Self { slots, bits, first: Vec::with_capacity(positions), corners_at: Vec::with_capacity(positions) }
     }
 
     /// The number of the position `key`, or the empty slot where it goes.
@@ -167,6 +172,7 @@ impl<K: Key> Table<K> {
         let id = self.first.len() as u32;
         self.slots[slot] = Slot { key, id };
         self.first.push(corner);
+        self.corners_at.push(0);
         if 3 * self.first.len() > 2 * self.slots.len() {
             self.grow();
         }
@@ -197,7 +203,7 @@ mod tests {
     fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
         let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
         let welded = weld(&corners, |&p| soup_key(p));
-        assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
+        assert_eq!((welded.id, welded.first, welded.corners_at), (vec![0, 0, 1, 0], vec![0, 2], vec![3, 1]));
         // Many keys, few distinct: the table's probing finds every repeat.
         let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
         let welded = weld(&many, |&p| grid_key(p));
