@@ -1,9 +1,9 @@
 //! The edges of welded triangles: which corners walk the same edge.
 //!
 //! Corner `c` is the start of edge `c % 3` of triangle `c / 3`, which runs to the triangle's next corner.
-//! The corners are bucketed by their edge's lower end (one counting pass and one scatter: the position
-//! numbers are small integers), and in each bucket, a handful of corners, those with the same higher end
-//! walk the same edge.
+//! The corners are bucketed by their edge's lower end (one scatter into buckets sized by the weld's count of
+//! corners at each position: the position numbers are small integers), and in each bucket, a handful of
+//! corners, those with the same higher end walk the same edge.
 
 use std::ops::Range;
 
