@@ -147,8 +147,8 @@ pub(crate) struct Parts {
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
-        let welded = weld::weld(3 * tris.len(), tris.iter().flatten().map(|&v| weld::grid_key(v)));
-        Self::of_welded(&welded.id, welded.first.len()).with_facing(|t| tris[t])
+        let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
+        Self::of_welded(&welded.id, &welded.corners_at).with_facing(|t| tris[t])
     }
 
     /// Finds which way each closed part faces from the corners of its triangles (`corners` of triangle `t`,
@@ -167,10 +167,10 @@ impl Parts {
     }
 
     /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
-    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle
+    /// (`corners_at[p]` corners at position `p`). Depends only on which corners share a position and on the triangle
     /// order: ties and non-manifold edges are decided in triangle and corner order.
-    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
-        let edges = Edges::of(id, positions);
+    pub(crate) fn of_welded(id: &[u32], corners_at: &[u32]) -> Self {
+        let edges = Edges::of(id, corners_at);
         let mut sheets = Sheets::of(id, &edges.partner);
         for &c in &edges.border {
             let s = sheets.of[c as usize / 3] as usize;
@@ -253,48 +253,69 @@ impl Sheets {
     /// file (on a tie, as its first triangle is). Two triangles walking their shared edge the same way
     /// differ in orientation; a sheet where a cycle of them contradicts itself cannot be oriented (open).
     fn of(id: &[u32], partner: &[u32]) -> Self {
-        // Per triangle reached: its sheet << 1 | whether it is reversed (relative to the sheet's first
-        // triangle during its walk). UNSEEN is even (not reversed) and gives NO_PART when shifted as an i32,
-        // as the sheet number does; it is not a repeated byte, as `weld`'s empty slot mark.
-        const UNSEEN: u32 = u32::MAX - 1;
-        let mut seen = vec![UNSEEN; id.len() / 3];
-        let (mut open, mut stack, mut walked) = (Vec::new(), Vec::new(), Vec::new());
-        for first in 0..seen.len() {
-            if seen[first] != UNSEEN || !has_area(id, first) {
-                continue;
-            }
-            let s = open.len() as u32;
-            let (mut against_first, mut contradiction) = (0usize, false);
-            seen[first] = s << 1;
-            stack.push(first as u32);
-            walked.clear();
-            while let Some(t) = stack.pop() {
-                walked.push(t);
-                let here = seen[t as usize];
-                for &p in &partner[3 * t as usize..3 * t as usize + 3] {
-                    if p == NO_PARTNER {
-                        continue;
-                    }
-                    let u = (p & !SAME_DIRECTION) as usize / 3;
-                    let there = here ^ u32::from(p & SAME_DIRECTION != 0);
-                    if seen[u] == UNSEEN {
-                        seen[u] = there;
-                        against_first += (there & 1) as usize;
-                        stack.push(u as u32);
-                    } else {
-                        contradiction |= seen[u] != there;
-                    }
-                }
-            }
-            open.push(contradiction);
-            // Most of the sheet against its first triangle: the sheet takes their orientation.
-            if 2 * against_first > walked.len() {
-                walked.iter().for_each(|&t| seen[t as usize] ^= 1);
+        let triangles = id.len() / 3;
+        let mut seen = vec![UNSEEN; triangles];
+        let mut walk = Walk { stack: vec![0; triangles], open: Vec::new(), against_most: Vec::new() };
+        for first in 0..triangles {
+            if seen[first] == UNSEEN && has_area(id, first) {
+                walk.sheet(first as u32, &mut seen, partner);
             }
         }
+        let Walk { open, against_most, .. } = walk;
         let of = seen.iter().map(|&v| ((v as i32) >> 1) as u32).collect();
-        let reversed = seen.iter().map(|&v| v & 1 != 0).collect();
+        // Relative to the sheet's first triangle, then to the orientation most of the sheet has.
+        let reversed = seen.iter().map(|&v| v != UNSEEN && ((v & 1 != 0) ^ against_most[(v >> 1) as usize])).collect();
         Self { of, reversed, open }
+    }
+}
+
+/// Per triangle reached by the sheet walk: its sheet << 1 | whether it is reversed relative to the sheet's first
+/// triangle. UNSEEN is even (not reversed) and gives NO_PART when shifted as an i32, as the sheet number does;
+/// it is not a repeated byte, as `weld`'s empty slot mark.
+const UNSEEN: u32 = u32::MAX - 1;
+
+/// The sheet walk's state: its stack and what it found per sheet.
+struct Walk {
+    /// The triangles reached and not yet left: room for every triangle (each is pushed once).
+    stack: Vec<u32>,
+    /// Per sheet: whether a cycle contradicts itself.
+    open: Vec<bool>,
+    /// Per sheet: whether most of its triangles are reversed relative to its first one.
+    against_most: Vec<bool>,
+}
+
+impl Walk {
+    /// Walks a new sheet from its first triangle `first` across the manifold edges (`partner`), marking the
+    /// triangles reached in `seen`.
+    fn sheet(&mut self, first: u32, seen: &mut [u32], partner: &[u32]) {
+        let s = self.open.len() as u32;
+        let (mut size, mut against_first, mut contradiction) = (0usize, 0usize, false);
+        seen[first as usize] = s << 1;
+        self.stack[0] = first;
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let t = self.stack[top] as usize;
+            size += 1;
+            let here = seen[t];
+            for &p in &partner[3 * t..3 * t + 3] {
+                if p == NO_PARTNER {
+                    continue;
+                }
+                let u = (p & !SAME_DIRECTION) as usize / 3;
+                let there = here ^ u32::from(p & SAME_DIRECTION != 0);
+                if seen[u] == UNSEEN {
+                    seen[u] = there;
+                    against_first += (there & 1) as usize;
+                    self.stack[top] = u as u32;
+                    top += 1;
+                } else {
+                    contradiction |= seen[u] != there;
+                }
+            }
+        }
+        self.open.push(contradiction);
+        self.against_most.push(2 * against_first > size);
     }
 }
 

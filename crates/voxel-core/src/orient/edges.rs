@@ -1,9 +1,9 @@
 //! The edges of welded triangles: which corners walk the same edge.
 //!
 //! Corner `c` is the start of edge `c % 3` of triangle `c / 3`, which runs to the triangle's next corner.
-//! The corners are bucketed by their edge's lower end (one counting pass and one scatter: the position
-//! numbers are small integers), and in each bucket, a handful of corners, those with the same higher end
-//! walk the same edge.
+//! The corners are bucketed by their edge's lower end (one scatter into buckets sized by the weld's count of
+//! corners at each position: the position numbers are small integers), and in each bucket, a handful of
+//! corners, those with the same higher end walk the same edge.
 
 use std::ops::Range;
 
@@ -49,6 +49,63 @@ pub(crate) const NO_PARTNER: u32 = u32::MAX >> 1;
 /// so never [`NO_PARTNER`]: three per triangle of a soup in memory).
 pub(crate) const SAME_DIRECTION: u32 = 1 << 31;
 
+/// Corner `c`'s bucket entry, `c` walking from position `a` to `b`: the edge's higher end in the high half,
+/// then the corner, then whether it walks the edge from the higher end; so entries order by the higher end,
+/// then by corner.
+fn entry(c: u32, a: u32, b: u32) -> u64 {
+    (u64::from(a.max(b)) << 32) | u64::from(c << 1) | u64::from(a > b)
+}
+
+/// The higher end of an entry's edge.
+fn higher_end(entry: u64) -> u32 {
+    (entry >> 32) as u32
+}
+
+/// The corner of an entry.
+fn corner(entry: u64) -> u32 {
+    entry as u32 >> 1
+}
+
+/// Bucket entries by an edge's lower end, each bucket with room for two entries per corner at its position
+/// (the most its triangles with area can give: two of their three edges touch it).
+struct Buckets {
+    entries: Vec<u64>,
+    /// Where each bucket starts in `entries`, and (at the end) where the last one ends.
+    start: Vec<u32>,
+    /// Where each bucket's next entry goes.
+    next: Vec<u32>,
+}
+
+impl Buckets {
+    /// Empty buckets for the edges of triangles with `corners_at[p]` corners at each position `p`.
+    fn for_corners(corners_at: &[u32]) -> Self {
+        // Each bucket's start: twice the corners before it.
+        let mut total = 0;
+        let start: Vec<u32> = corners_at
+            .iter()
+            .chain([&0])
+            .map(|&n| {
+                let start = total;
+                total += 2 * n;
+                start
+            })
+            .collect();
+        Self { entries: vec![0; total as usize], next: start[..corners_at.len()].to_vec(), start }
+    }
+
+    /// Adds `entry` to bucket `p`.
+    fn push(&mut self, p: u32, entry: u64) {
+        let next = &mut self.next[p as usize];
+        self.entries[*next as usize] = entry;
+        *next += 1;
+    }
+
+    /// The entries of bucket `p`, in the order they were added.
+    fn bucket(&mut self, p: usize) -> &mut [u64] {
+        &mut self.entries[self.start[p] as usize..self.next[p] as usize]
+    }
+}
+
 /// The edges of the triangles with area, by how many corners walk each.
 pub(crate) struct Edges {
     /// Each corner's partner on a manifold edge (walked by exactly two corners), or'ed with
@@ -63,64 +120,65 @@ pub(crate) struct Edges {
 }
 
 impl Edges {
-    /// Groups the corners of the triangles (three per triangle, `id` their positions, `positions` how many
-    /// there are) by the edge they walk, leaving out triangles without area.
-    pub(crate) fn of(id: &[u32], positions: usize) -> Self {
-        let mut start = vec![0u32; positions + 1];
-        for_each_edge(id, |_, a, b| start[a.min(b) as usize] += 1);
-        let mut total = 0;
-        for s in &mut start {
-            (*s, total) = (total, total + *s);
-        }
-        // Per bucket, in corner order: the edge's higher end, and the corner or'ed with `SAME_DIRECTION`
-        // when it walks the edge from the higher end.
-        let mut bucketed: Vec<(u32, u32)> = vec![(0, 0); total as usize];
-        for_each_edge(id, |c, a, b| {
-            let (lo, entry) = if a < b { (a, (b, c)) } else { (b, (a, c | SAME_DIRECTION)) };
-            bucketed[start[lo as usize] as usize] = entry;
-            start[lo as usize] += 1;
-        });
-        // `start[p]` is now the end of bucket p, the start of bucket p + 1.
+    /// Groups the corners of the triangles (three per triangle, `id` their positions, `corners_at` how many
+    /// corners are at each position) by the edge they walk, leaving out triangles without area.
+    pub(crate) fn of(id: &[u32], corners_at: &[u32]) -> Self {
+        let positions = corners_at.len();
+        let mut bucketed = Buckets::for_corners(corners_at);
+        for_each_edge(id, |c, a, b| bucketed.push(a.min(b), entry(c, a, b)));
         let mut found =
             Self { partner: vec![NO_PARTNER; id.len()], border: Vec::new(), corners: Vec::new(), groups: Vec::new() };
-        let mut from = 0;
-        for &end in &start[..positions] {
-            found.pair(&mut bucketed[from as usize..end as usize]);
-            from = end;
+        for p in 0..positions {
+            found.pair(bucketed.bucket(p));
         }
         let corners = &found.corners;
         found.groups.sort_unstable_by_key(|g| corners[g.start as usize]);
         found
     }
 
-    /// Pairs the corners of one bucket (in corner order) that walk the same edge: a stable insertion sort by
-    /// the higher end (a bucket holds a handful of corners) makes each edge's corners a run, in corner order.
-    fn pair(&mut self, bucket: &mut [(u32, u32)]) {
+    /// Pairs the corners of one bucket (entries in corner order) that walk the same edge: an insertion sort
+    /// (a bucket holds a handful of corners) makes each edge's corners a run, in corner order.
+    fn pair(&mut self, bucket: &mut [u64]) {
         for i in 1..bucket.len() {
             let entry = bucket[i];
             let mut j = i;
-            while j > 0 && bucket[j - 1].0 > entry.0 {
+            while j > 0 && bucket[j - 1] > entry {
                 bucket[j] = bucket[j - 1];
                 j -= 1;
             }
             bucket[j] = entry;
         }
-        let corner = |entry: u32| entry & !SAME_DIRECTION;
-        for edge in bucket.chunk_by(|a, b| a.0 == b.0) {
-            match *edge {
-                [(_, a)] => self.border.push(corner(a)),
-                [(_, a), (_, b)] => {
-                    let same = ((a ^ b) & SAME_DIRECTION) ^ SAME_DIRECTION;
-                    self.partner[corner(a) as usize] = corner(b) | same;
-                    self.partner[corner(b) as usize] = corner(a) | same;
-                }
-                _ => {
-                    let from = self.corners.len() as u32;
-                    self.corners.extend(edge.iter().map(|&(_, c)| corner(c)));
-                    self.groups.push(from..self.corners.len() as u32);
-                }
+        // Most edges are walked twice: those take the first branch, without looking for the run's end.
+        let mut i = 0;
+        while let Some(&first) = bucket.get(i) {
+            let on_edge = |j: usize| bucket.get(j).is_some_and(|&e| higher_end(e) == higher_end(first));
+            if !on_edge(i + 1) {
+                self.border.push(corner(first));
+                i += 1;
+            } else if !on_edge(i + 2) {
+                self.partners(first, bucket[i + 1]);
+                i += 2;
+            } else {
+                let end = (i + 3..).find(|&j| !on_edge(j)).unwrap_or(bucket.len());
+                self.non_manifold_edge(&bucket[i..end]);
+                i = end;
             }
         }
+    }
+
+    /// Makes the corners of entries `a` and `b` partners on their edge.
+    fn partners(&mut self, a: u64, b: u64) {
+        // Both walk it from the same end: their last bits agree.
+        let same = ((a ^ b ^ 1) as u32 & 1) * SAME_DIRECTION;
+        self.partner[corner(a) as usize] = corner(b) | same;
+        self.partner[corner(b) as usize] = corner(a) | same;
+    }
+
+    /// Records a non-manifold edge, walked by the corners of `edge` (its entries, in corner order).
+    fn non_manifold_edge(&mut self, edge: &[u64]) {
+        let from = self.corners.len() as u32;
+        self.corners.extend(edge.iter().map(|&e| corner(e)));
+        self.groups.push(from..self.corners.len() as u32);
     }
 
     /// The non-manifold edges' corners, edge by edge in order of their first corner.
@@ -133,16 +191,21 @@ impl Edges {
 mod tests {
     use super::*;
 
+    /// The number of corners at each of the `positions` positions `id`.
+    fn corners_at(id: &[u32], positions: usize) -> Vec<u32> {
+        (0..positions as u32).map(|p| id.iter().filter(|&&i| i == p).count() as u32).collect()
+    }
+
     #[test]
     fn corners_are_grouped_by_the_edge_they_walk() {
         // Three triangles on the edge 0–1 (one walking it the other way), a fourth sharing 1–2 with the first,
         // and a degenerate one (positions 3, 3, 4) left out.
         let id = [0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 1, 5, 3, 3, 4];
-        let edges = Edges::of(&id, 6);
+        let edges = Edges::of(&id, &corners_at(&id, 6));
         assert_eq!(edges.non_manifold().collect::<Vec<_>>(), [&[0, 3, 6][..]]);
         assert_eq!((edges.partner[1], edges.partner[9]), (9, 1));
         // Two triangles walking an edge the same way (one of them reversed).
-        let same = Edges::of(&[0, 1, 2, 0, 1, 3], 4);
+        let same = Edges::of(&[0, 1, 2, 0, 1, 3], &[2, 2, 1, 1]);
         assert_eq!(same.partner[..4], [3 | SAME_DIRECTION, NO_PARTNER, NO_PARTNER, SAME_DIRECTION]);
         assert_eq!(edges.partner.iter().filter(|&&p| p != NO_PARTNER).count(), 2);
         let mut border = edges.border.clone();

@@ -31,11 +31,11 @@ impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
-        let welded = weld(corners.len(), corners.iter().map(|v| soup_key(v.position)));
+        let welded = weld(corners, |v| soup_key(v.position));
         // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
         // lose its volume to rounding.
         let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
-        let parts = Parts::of_welded(&welded.id, welded.first.len())
+        let parts = Parts::of_welded(&welded.id, &welded.corners_at)
             .with_facing(|t| [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin));
         Self { parts: Arc::new(parts), first: welded.first }
     }

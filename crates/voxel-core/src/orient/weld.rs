@@ -8,6 +8,8 @@ pub(crate) struct Welded {
     pub id: Vec<u32>,
     /// The first corner at each position.
     pub first: Vec<u32>,
+    /// The number of corners at each position.
+    pub corners_at: Vec<u32>,
 }
 
 /// A grid-space position's key (−0 and +0 alike).
@@ -21,7 +23,7 @@ pub(crate) fn soup_key(p: [f32; 3]) -> [u32; 3] {
 }
 
 /// A position key whose bits a multiplicative hash spreads over its top bits.
-pub(crate) trait Key: Copy + Eq {
+pub(crate) trait Key: Copy + Eq + Default {
     /// The key's hash: its top bits pick the slot.
     fn hash(&self) -> u64;
 }
@@ -104,34 +106,93 @@ fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bo
     true
 }
 
-/// Welds corners by their keys, given in corner order (`count` of them): one pass through an
-/// open-addressing table of position numbers, at most two-thirds full; equal keys are found exactly (the
-/// hash only picks where to look first), each position's key kept once, densely.
-pub(crate) fn weld<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> Welded {
-    let bits = table_bits(count);
-    let mut slots = vec![EMPTY; 1 << bits];
-    let mask = slots.len() - 1;
-    // Room for a position per four corners (a closed surface has one per six).
-    let mut distinct: Vec<K> = Vec::with_capacity(count / 4);
-    let mut welded = Welded { id: Vec::with_capacity(count), first: Vec::with_capacity(count / 4) };
-    for (c, key) in keys.enumerate() {
-        let mut slot = (key.hash() >> (64 - bits)) as usize;
-        let id = loop {
-            match slots[slot] {
-                EMPTY => {
-                    let id = distinct.len() as u32;
-                    slots[slot] = id;
-                    distinct.push(key);
-                    welded.first.push(c as u32);
-                    break id;
-                }
-                id if distinct[id as usize] == key => break id,
-                _ => slot = (slot + 1) & mask,
-            }
+/// Welds corners (`corners`, in order) by their keys (`key`): one pass through an open-addressing table that
+/// holds each position's key with its number (so a probe reads one slot), at most two-thirds full; equal keys
+/// are found exactly (the hash only picks where to look first).
+pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
+    let mut table = Table::with_room(corners.len() / 2);
+    let mut id = vec![0; corners.len()];
+    for (c, (corner, id)) in corners.iter().zip(&mut id).enumerate() {
+        let key = key(corner);
+        *id = match table.find(key) {
+            Ok(id) => id,
+            Err(empty) => table.insert(empty, key, c as u32),
         };
-        welded.id.push(id);
+        table.corners_at[*id as usize] += 1;
     }
-    welded
+    Welded { id, first: table.first, corners_at: table.corners_at }
+}
+
+/// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
+#[derive(Clone, Copy)]
+struct Slot<K> {
+    key: K,
+    id: u32,
+}
+
+/// The welding table: the positions seen so far, by key.
+struct Table<K> {
+    slots: Vec<Slot<K>>,
+    /// The number of slot bits.
+    bits: u32,
+    /// The first corner at each position, by number.
+    first: Vec<u32>,
+    /// The number of corners at each position so far, by number.
+    corners_at: Vec<u32>,
+}
+
+impl<K: Key> Table<K> {
+    /// An empty table with room for `positions` positions (it grows when it needs more).
+    fn with_room(positions: usize) -> Self {
+        let bits = table_bits(positions);
+        let slots = vec![Slot { key: K::default(), id: EMPTY }; 1 << bits];
+        Self { slots, bits, first: Vec::with_capacity(positions), corners_at: Vec::with_capacity(positions) }
+    }
+
+    /// The number of the position `key`, or the empty slot where it goes.
+    fn find(&self, key: K) -> Result<u32, usize> {
+        let mask = self.slots.len() - 1;
+        let mut slot = (key.hash() >> (64 - self.bits)) as usize;
+        loop {
+            let here = self.slots[slot];
+            if here.id == EMPTY {
+                return Err(slot);
+            }
+            if here.key == key {
+                return Ok(here.id);
+            }
+            slot = (slot + 1) & mask;
+        }
+    }
+
+    /// Numbers the new position `key` (first seen at `corner`) in the empty slot `slot`, then keeps the table
+    /// at most two-thirds full.
+    #[cold]
+    fn insert(&mut self, slot: usize, key: K, corner: u32) -> u32 {
+        let id = self.first.len() as u32;
+        self.slots[slot] = Slot { key, id };
+        self.first.push(corner);
+        self.corners_at.push(0);
+        if 3 * self.first.len() > 2 * self.slots.len() {
+            self.grow();
+        }
+        id
+    }
+
+    /// Doubles the table, keeping every position's number.
+    #[cold]
+    fn grow(&mut self) {
+        let old = std::mem::replace(&mut self.slots, vec![Slot { key: K::default(), id: EMPTY }; 2 << self.bits]);
+        self.bits += 1;
+        let mask = self.slots.len() - 1;
+        for here in old.into_iter().filter(|s| s.id != EMPTY) {
+            let mut slot = (here.key.hash() >> (64 - self.bits)) as usize;
+            while self.slots[slot].id != EMPTY {
+                slot = (slot + 1) & mask;
+            }
+            self.slots[slot] = here;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -141,13 +202,18 @@ mod tests {
     #[test]
     fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
         let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
-        let welded = weld(corners.len(), corners.iter().map(|&p| soup_key(p)));
-        assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
+        let welded = weld(&corners, |&p| soup_key(p));
+        assert_eq!((welded.id, welded.first, welded.corners_at), (vec![0, 0, 1, 0], vec![0, 2], vec![3, 1]));
         // Many keys, few distinct: the table's probing finds every repeat.
         let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
-        let welded = weld(many.len(), many.iter().map(|&p| grid_key(p)));
+        let welded = weld(&many, |&p| grid_key(p));
         assert_eq!(welded.first.len(), 97 * 89);
         assert!(welded.id.iter().enumerate().all(|(c, &id)| many[welded.first[id as usize] as usize] == many[c]));
+        // More positions than the table first makes room for (a position per two corners): it grows.
+        let line: Vec<DVec3> = (0..20_000).map(|i| DVec3::new(f64::from(i % 15_000), 0.5, 1.0)).collect();
+        let grown = weld(&line, |&p| grid_key(p));
+        assert_eq!(grown.first, (0..15_000).collect::<Vec<u32>>());
+        assert!(grown.id.iter().enumerate().all(|(c, &id)| id == c as u32 % 15_000));
         // The same keys, once each, are all different; with one repeat, not.
         let firsts = welded.first.iter().map(|&c| grid_key(many[c as usize]));
         assert!(all_different(welded.first.len(), firsts.clone()));
@@ -155,7 +221,7 @@ mod tests {
     }
 
     /// A key whose hash is its first part: different keys with equal hashes.
-    #[derive(Clone, Copy, PartialEq, Eq)]
+    #[derive(Clone, Copy, Default, PartialEq, Eq)]
     struct Colliding(u64, u64);
 
     impl Key for Colliding {
