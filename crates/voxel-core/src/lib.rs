@@ -34,6 +34,10 @@ mod visible;
 pub mod vox;
 pub mod voxelize;
 
+#[cfg(test)]
+#[path = "../tests/support/models.rs"]
+mod test_models;
+
 pub use anim::{AnimatedModel, Bounds, ClipInfo};
 pub use error::{Result, VoxelError};
 pub use grid::{BitGrid, GridSize, GridSpec};

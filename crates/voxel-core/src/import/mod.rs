@@ -195,6 +195,7 @@ impl SoupBuilder<'_> {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
                 })
                 .collect();
+            let base = self.soup.add_sources(&world);
             for tri in &prim.triangles {
                 let corners = tri.map(|i| {
                     let i = i as usize;
@@ -204,7 +205,7 @@ impl SoupBuilder<'_> {
                         color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
                     }
                 });
-                self.soup.push_triangle(part, corners);
+                self.soup.push_indexed_triangle(part, corners, tri.map(|i| base + i));
             }
         }
         Ok(())

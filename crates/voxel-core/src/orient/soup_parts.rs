@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::Parts;
-use super::weld::{all_different, grid_key, soup_key, weld};
+use super::weld::{all_different, grid_key, soup_key, weld, weld_indexed};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
 
@@ -31,7 +31,11 @@ impl SoupParts {
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
-        let welded = weld(corners, |v| soup_key(v.position));
+        // Source vertices save work when corners share them (a mesh with unused vertices may have more).
+        let welded = match soup.sources().filter(|s| 2 * s.positions.len() <= s.index.len()) {
+            Some(sources) => weld_indexed(&sources.positions, &sources.index),
+            None => weld(corners, |v| soup_key(v.position)),
+        };
         // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
         // lose its volume to rounding.
         let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
@@ -64,6 +68,7 @@ pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &[GridTriangle]) -> Arc<Pa
 mod tests {
     use super::*;
     use crate::grid::{GridSize, GridSpec};
+    use crate::orient::weld::Welded;
     use crate::shapes::{IndexedMesh, cuboid};
     use crate::voxelize::{VoxelizeOptions, voxelize};
 
@@ -162,5 +167,54 @@ mod tests {
         let parts = closed_parts(&soup, &tris);
         assert_eq!(*parts, Parts::find(&tris));
         assert_eq!((parts.count, soup.closed_parts().parts.count), (1, 0));
+    }
+
+    fn welded_fields(w: Welded) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+        (w.id, w.first, w.corners_at)
+    }
+
+    #[test]
+    fn the_importers_source_vertices_weld_as_the_corners_do() {
+        let Some(dir) = crate::test_models::models_dir() else { return };
+        let mut files = crate::inputs::expand_inputs(std::slice::from_ref(&dir));
+        for sub in std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().is_dir()) {
+            files.extend(crate::inputs::expand_inputs(&[sub.path()]));
+        }
+        assert!(files.len() >= 17, "{} corpus models", files.len());
+        for file in files {
+            let soup = crate::import::load_file(&file).unwrap();
+            let sources = soup.sources().unwrap_or_else(|| panic!("{}: no source vertices", file.display()));
+            let by_corner = weld(soup.vertices(), |v| soup_key(v.position));
+            assert_eq!(
+                welded_fields(weld_indexed(&sources.positions, &sources.index)),
+                welded_fields(by_corner),
+                "{}",
+                file.display()
+            );
+        }
+    }
+
+    #[test]
+    fn a_soup_forgets_its_sources_when_its_corners_change() {
+        let mesh = cuboid([0.0; 3], [1.0; 3]);
+        let indexed = || {
+            let mut soup = TriangleSoup::default();
+            let material = soup.add_material(Default::default());
+            let part = soup.add_part(material, "box");
+            let base = soup.add_sources(&mesh.positions);
+            for t in &mesh.triangles {
+                let corners = t.map(|i| crate::soup::Vertex::at(mesh.positions[i as usize]));
+                soup.push_indexed_triangle(part, corners, t.map(|i| base + i));
+            }
+            soup
+        };
+        let soup = indexed();
+        assert_eq!(soup.sources().map(|s| (s.positions.len(), s.index.len())), Some((8, 36)));
+        assert_eq!(*soup.closed_parts().parts, *SoupParts::of(&TriangleSoup::from_mesh(&mesh, [1.0; 4])).parts);
+        let mut moved = indexed();
+        moved.vertices_mut()[0].position[0] = 0.5;
+        let mut grown = indexed();
+        grown.push_triangle(0, [crate::soup::Vertex::at([0.0; 3]); 3]);
+        assert!(moved.sources().is_none() && grown.sources().is_none());
     }
 }

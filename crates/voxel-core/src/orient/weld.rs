@@ -114,7 +114,12 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
     // that. Room for more costs more than the growth: a table beyond the core's L2 cache slows every probe
     // (room for one position per two corners: 4 MiB of slots for the FlightHelmet, its analysis 7.1 ms
     // instead of 4.7).
-    let mut table = Table::with_room(corners.len() / 6);
+    weld_with_room(corners, key, corners.len() / 6)
+}
+
+/// [`weld`] with a table that starts with room for `positions` distinct keys.
+fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: usize) -> Welded {
+    let mut table = Table::with_room(positions);
     let mut id = vec![0; corners.len()];
     for (c, (corner, id)) in corners.iter().zip(&mut id).enumerate() {
         let key = key(corner);
@@ -128,6 +133,31 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
 }
 
 /// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
+/// [`weld`] of corners read from indexed source vertices (corner `c` at `positions[index[c]]`, bit for bit):
+/// welds the sources, one per vertex rather than one per corner, then numbers each corner's position in order
+/// of first appearance as [`weld`] of the corners would, so the result is the same.
+pub(crate) fn weld_indexed(positions: &[[f32; 3]], index: &[u32]) -> Welded {
+    // Source vertices are mostly at different positions: room for all of them.
+    let sources = weld_with_room(positions, |&p| soup_key(p), positions.len());
+    let mut renumbered = vec![EMPTY; sources.first.len()];
+    let mut welded = Welded {
+        id: vec![0; index.len()],
+        first: Vec::with_capacity(sources.first.len()),
+        corners_at: Vec::with_capacity(sources.first.len()),
+    };
+    for (c, (&source, id)) in index.iter().zip(&mut welded.id).enumerate() {
+        let position = &mut renumbered[sources.id[source as usize] as usize];
+        if *position == EMPTY {
+            *position = welded.first.len() as u32;
+            welded.first.push(c as u32);
+            welded.corners_at.push(0);
+        }
+        *id = *position;
+        welded.corners_at[*id as usize] += 1;
+    }
+    welded
+}
+
 #[derive(Clone, Copy)]
 struct Slot<K> {
     key: K,
