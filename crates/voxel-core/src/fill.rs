@@ -56,7 +56,8 @@ pub(crate) struct Columns {
     starts: Vec<usize>,
     crossings: Vec<Crossing>,
     /// Per triangle: whether its projection on the XY plane runs counter-clockwise, so that with its corners
-    /// in the file's order it faces up (+Z). Only read for triangles that some column crosses.
+    /// in the file's order it faces up (+Z). Meaningful only for triangles that some column crosses (the
+    /// rasterizer leaves the others `false`).
     pub faces_up: Vec<bool>,
 }
 

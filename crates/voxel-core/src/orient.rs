@@ -99,8 +99,7 @@ impl Role {
     }
 }
 
-/// Marks a triangle that belongs to no part (two corners at the same position: no surface), and a corner
-/// without a partner.
+/// Marks a triangle that belongs to no part (two corners at the same position: no surface).
 const NO_PART: u32 = u32::MAX;
 
 /// Union–find over sheets (the non-manifold edges join them into parts).
@@ -153,7 +152,7 @@ impl Parts {
 
     /// Finds which way each closed part faces from the corners of its triangles (`corners` of triangle `t`,
     /// from any origin: a closed surface's signed volume does not depend on it).
-    pub(crate) fn with_facing(mut self, corners: impl Fn(usize) -> [DVec3; 3]) -> Self {
+    fn with_facing(mut self, corners: impl Fn(usize) -> [DVec3; 3]) -> Self {
         let mut volume = vec![0.0f64; self.count];
         for (t, (&part, &reversed)) in self.of.iter().zip(&self.reversed).enumerate() {
             if part != NO_PART {
@@ -342,6 +341,7 @@ pub(crate) fn winding_roles(
     }
     let parts = closed_parts();
     let inward = &parts.inward;
+    debug_assert_eq!(inward.len(), parts.count, "closed parts without their facing");
     let mut roles = as_in_file;
     for ((role, &part), &reversed) in roles.iter_mut().zip(&parts.of).zip(&parts.reversed) {
         *role = match part {
@@ -530,23 +530,31 @@ mod tests {
     }
 
     #[test]
-    fn a_soup_is_analysed_before_its_grid_only_when_its_facing_does_not_cancel() {
+    fn a_soup_is_analysed_ahead_only_when_its_facing_does_not_cancel_and_the_passes_are_not_over() {
         use crate::voxelize::{FillMode, VoxelizeOptions, voxelize};
-        let voxelized = |mesh: &IndexedMesh, fill: FillMode| {
+        let analysed_ahead = |mesh: &IndexedMesh| {
             let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
-            let options = VoxelizeOptions { grid: GridSize::Resolution(8), fill, ..Default::default() };
-            voxelize(&soup, &options).unwrap();
+            analyse_parts_if_unbalanced(&soup);
             soup.has_closed_parts()
         };
-        // A closed box: its columns balance, nothing is analysed.
-        assert!(!voxelized(&block(), FillMode::Winding));
+        // A closed box: nothing to analyse ahead.
+        assert!(!analysed_ahead(&block()));
         // With a speck of a horizontal triangle beside it, which no column crosses: the columns still balance,
-        // but the projections do not cancel, so the analysis ran beside the grid's set-up (not with parity).
+        // but the projections do not cancel, so the hint starts the analysis.
         let mut speck = block();
         speck.positions.extend([[3.9, 1.3, 1.7], [4.0, 1.3, 1.7], [3.9, 1.4, 1.7]]);
         speck.triangles.push([8, 9, 10]);
-        assert!(voxelized(&speck, FillMode::Winding));
-        assert!(!voxelized(&speck, FillMode::Parity));
+        let soup = TriangleSoup::from_mesh(&speck, [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(8), 1.0, 1 << 20).unwrap();
+        let columns = crossings_by_rasterizing(&spec, &spec.grid_triangles(&soup));
+        let as_in_file: Vec<Role> = columns.faces_up.iter().map(|&up| Role::facing(up)).collect();
+        assert!(consistent_as_in_file(&columns, &as_in_file), "the speck must cross no column");
+        assert!(analysed_ahead(&speck));
+        // With one thread the passes are over before the analysis could start, and they did not need it.
+        let options = VoxelizeOptions { grid: GridSize::Resolution(8), fill: FillMode::Winding, ..Default::default() };
+        let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        one_thread.install(|| voxelize(&soup, &options)).unwrap();
+        assert!(!soup.has_closed_parts());
     }
 
     #[test]

@@ -200,7 +200,14 @@ impl TriangleSoup {
     /// A voxelization may start it on one thread while another waits for it here, so the analysis must not wait
     /// for the thread pool (it runs no rayon tasks): a thread blocked here then never holds work it needs.
     pub(crate) fn closed_parts(&self) -> &SoupParts {
-        self.closed_parts.get_or_init(|| Arc::new(SoupParts::of(self)))
+        thread_local!(static ANALYSING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) });
+        debug_assert!(!ANALYSING.get(), "the part analysis waited for the thread pool and ran into itself");
+        self.closed_parts.get_or_init(|| {
+            ANALYSING.set(true);
+            let parts = SoupParts::of(self);
+            ANALYSING.set(false);
+            Arc::new(parts)
+        })
     }
 
     /// Whether the soup's closed parts have been found (and its positions not changed since).

@@ -1,6 +1,7 @@
 //! The voxelization pipeline: normalize → fill and shell side by side → combine → colour → (hollow).
 
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::colour_pass::{pastel_all, surface_colors};
@@ -121,8 +122,9 @@ pub fn voxelize_within(
 ///
 /// The fill and the shell run side by side (with two threads or more they overlap, so their sum can exceed
 /// the voxelization's wall time); each is timed from its own start to its own end, which includes any of
-/// the other's work its thread picked up while waiting. Combining the two (the thin cells, the flood fill)
-/// and finding the visible cells count in neither field.
+/// the other's work its thread picked up while waiting, and for the fill a wait for the soup's part analysis
+/// started beside them (which itself counts in neither field). Combining the two (the thin cells, the flood
+/// fill) and finding the visible cells count in neither field.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PassTimes {
     /// Fitting the grid and the grid triangles, then the fill (alongside the shell).
@@ -150,8 +152,12 @@ fn voxelize_within_timed(
     // columns will not balance, it starts at once on the other thread, beside the grid's set-up and the shell,
     // and the fill waits for it only if it gets there first. Otherwise the fill runs it if its columns show the
     // need, beside the shell.
+    // Set when the passes are done (or failed): an analysis not started by then is not needed (one thread,
+    // where the join runs its halves one after the other, or a busy pool).
+    let settled = AtomicBool::new(false);
     let (passes, ()) = rayon::join(
         || -> Result<_> {
+            let _settle = Settle(&settled);
             let (spec, tris) = prepare(soup, options, bounds)?;
             let prepared = started.elapsed();
             let ((shell, shell_time), (fill, fill_time)) = rayon::join(
@@ -168,7 +174,7 @@ fn voxelize_within_timed(
             Ok((spec, tris, fill, shell, prepared + fill_time, shell_time))
         },
         || {
-            if options.fill == FillMode::Winding {
+            if options.fill == FillMode::Winding && !settled.load(Ordering::Acquire) {
                 analyse_parts_if_unbalanced(soup);
             }
         },
@@ -194,6 +200,15 @@ fn voxelize_within_timed(
     let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
     let solid = (!options.hollow).then_some(solid);
     Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
+}
+
+/// Sets its flag when dropped: the passes are over, however they ended.
+struct Settle<'a>(&'a AtomicBool);
+
+impl Drop for Settle<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
+    }
 }
 
 /// The result of `f` and how long it took.
