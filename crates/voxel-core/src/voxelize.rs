@@ -115,7 +115,7 @@ pub fn voxelize_within(
     options: &VoxelizeOptions,
     bounds: ([f32; 3], [f32; 3]),
 ) -> Result<VoxelModel> {
-    voxelize_within_timed(soup, options, bounds).map(|(model, _)| model)
+    voxelize_within_timed(soup, options, Some(bounds)).map(|(model, _)| model)
 }
 
 /// The wall time of the passes of one voxelization (for benchmarks).
@@ -137,14 +137,14 @@ pub struct PassTimes {
 
 /// [`voxelize`], also reporting how long its passes took.
 pub fn voxelize_timed(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<(VoxelModel, PassTimes)> {
-    voxelize_within_timed(soup, options, soup.bounds().ok_or_else(|| VoxelError::Empty(String::new()))?)
+    voxelize_within_timed(soup, options, None)
 }
 
 /// [`voxelize_within`], also reporting how long its passes took.
 fn voxelize_within_timed(
     soup: &TriangleSoup,
     options: &VoxelizeOptions,
-    bounds: ([f32; 3], [f32; 3]),
+    bounds: Option<([f32; 3], [f32; 3])>,
 ) -> Result<(VoxelModel, PassTimes)> {
     let started = Instant::now();
     let bvh = OnceLock::new();
@@ -218,12 +218,14 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
     (value, started.elapsed())
 }
 
-/// Checks `soup` and `options`, fits the grid of `options` to `bounds` and places the soup's triangles on it.
+/// Checks `soup` and `options`, fits the grid of `options` to `bounds` (the soup's own when `None`) and places
+/// the soup's triangles on it.
 fn prepare(
     soup: &TriangleSoup,
     options: &VoxelizeOptions,
-    bounds: ([f32; 3], [f32; 3]),
+    bounds: Option<([f32; 3], [f32; 3])>,
 ) -> Result<(GridSpec, Vec<GridTriangle>)> {
+    let bounds = bounds.or_else(|| soup.bounds()).ok_or_else(|| VoxelError::Empty(String::new()))?;
     soup.validate()?;
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
