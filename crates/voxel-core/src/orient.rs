@@ -99,7 +99,7 @@ impl Role {
     }
 }
 
-/// Marks a triangle that belongs to no part (two corners at the same position: no surface).
+/// Marks a triangle that belongs to no closed part (of an open sheet, or with two corners at the same position).
 const NO_PART: u32 = u32::MAX;
 
 /// Union–find over sheets (the non-manifold edges join them into parts).
@@ -364,10 +364,11 @@ pub(crate) fn winding_roles(
 
 /// Analyses `soup`'s closed parts now (the analysis it keeps, [`TriangleSoup::closed_parts`]) when it has none
 /// yet and its facing does not cancel out on the XY plane ([`facing_unbalanced`]): then a winding fill will
-/// very likely need them, and the caller can run this beside work that does not (the grid's set-up). A soup
+/// very likely need them, and the caller can run this beside work that does not (the grid's set-up), unless
+/// that work is already over (`settled`: then the fill has run the analysis itself if it needed it). A soup
 /// that the hint misses is analysed when its columns show the need, as before.
-pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup) {
-    if !soup.has_closed_parts() && facing_unbalanced(soup) {
+pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicBool) {
+    if !soup.has_closed_parts() && facing_unbalanced(soup) && !settled.load(Ordering::Relaxed) {
         soup.closed_parts();
     }
 }
@@ -534,7 +535,7 @@ mod tests {
         use crate::voxelize::{FillMode, VoxelizeOptions, voxelize};
         let analysed_ahead = |mesh: &IndexedMesh| {
             let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
-            analyse_parts_if_unbalanced(&soup);
+            analyse_parts_if_unbalanced(&soup, &AtomicBool::new(false));
             soup.has_closed_parts()
         };
         // A closed box: nothing to analyse ahead.

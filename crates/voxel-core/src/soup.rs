@@ -2,6 +2,7 @@
 //!
 //! Both front doors produce it: the `gltf`-crate importer ([`crate::import`]) and the app's Bevy asset reader.
 
+use std::cell::Cell;
 use std::sync::{Arc, OnceLock};
 
 use crate::error::{Result, VoxelError};
@@ -200,13 +201,19 @@ impl TriangleSoup {
     /// A voxelization may start it on one thread while another waits for it here, so the analysis must not wait
     /// for the thread pool (it runs no rayon tasks): a thread blocked here then never holds work it needs.
     pub(crate) fn closed_parts(&self) -> &SoupParts {
-        thread_local!(static ANALYSING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) });
+        thread_local!(static ANALYSING: Cell<bool> = const { Cell::new(false) });
+        /// Clears the flag however the analysis ends (a panic included: the thread lives on in the pool).
+        struct Analysing;
+        impl Drop for Analysing {
+            fn drop(&mut self) {
+                ANALYSING.set(false);
+            }
+        }
         debug_assert!(!ANALYSING.get(), "the part analysis waited for the thread pool and ran into itself");
         self.closed_parts.get_or_init(|| {
             ANALYSING.set(true);
-            let parts = SoupParts::of(self);
-            ANALYSING.set(false);
-            Arc::new(parts)
+            let _analysing = Analysing;
+            Arc::new(SoupParts::of(self))
         })
     }
 
@@ -217,15 +224,21 @@ impl TriangleSoup {
 
     /// Adds indexed source vertices at `positions` for the triangles pushed with [`Self::push_indexed_triangle`],
     /// and returns the index of the first one. A soup that has corners without a source keeps no sources.
-    pub(crate) fn add_sources(&mut self, positions: &[[f32; 3]]) -> u32 {
+    /// Keeps none (from then on) when a primitive brings more vertices than the `corners` it is about to add (a
+    /// large shared accessor: welding them would cost more than the corners), or past `u32` indices.
+    pub(crate) fn add_sources(&mut self, positions: &[[f32; 3]], corners: usize) -> u32 {
         let sources = match &mut self.sources {
             Some(sources) => sources,
             None if self.vertices.is_empty() => self.sources.insert(SourceVertices::default()),
             None => return 0,
         };
-        let base = sources.positions.len() as u32;
+        let base = sources.positions.len();
+        if positions.len() > corners || u32::try_from(base + positions.len()).is_err() {
+            self.sources = None;
+            return 0;
+        }
         sources.positions.extend_from_slice(positions);
-        base
+        base as u32
     }
 
     /// [`Self::push_triangle`] for corners read from the source vertices `index` (added by
@@ -239,7 +252,11 @@ impl TriangleSoup {
 
     /// The source vertices of every corner, when the soup was built from indexed vertices only.
     pub(crate) fn sources(&self) -> Option<&SourceVertices> {
-        self.sources.as_ref().filter(|s| s.index.len() == self.vertices.len())
+        let sources = self.sources.as_ref().filter(|s| s.index.len() == self.vertices.len())?;
+        debug_assert!(self.vertices.iter().zip(&sources.index).all(|(v, &i)| {
+            sources.positions.get(i as usize).is_some_and(|p| p.map(f32::to_bits) == v.position.map(f32::to_bits))
+        }));
+        Some(sources)
     }
 
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.

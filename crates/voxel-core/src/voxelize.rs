@@ -174,8 +174,8 @@ fn voxelize_within_timed(
             Ok((spec, tris, fill, shell, prepared + fill_time, shell_time))
         },
         || {
-            if options.fill == FillMode::Winding && !settled.load(Ordering::Acquire) {
-                analyse_parts_if_unbalanced(soup);
+            if options.fill == FillMode::Winding && !settled.load(Ordering::Relaxed) {
+                analyse_parts_if_unbalanced(soup, &settled);
             }
         },
     );
@@ -207,7 +207,7 @@ struct Settle<'a>(&'a AtomicBool);
 
 impl Drop for Settle<'_> {
     fn drop(&mut self) {
-        self.0.store(true, Ordering::Release);
+        self.0.store(true, Ordering::Relaxed);
     }
 }
 

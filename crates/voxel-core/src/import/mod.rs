@@ -195,7 +195,7 @@ impl SoupBuilder<'_> {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
                 })
                 .collect();
-            let base = self.soup.add_sources(&world);
+            let base = self.soup.add_sources(&world, 3 * prim.triangles.len());
             for tri in &prim.triangles {
                 let corners = tri.map(|i| {
                     let i = i as usize;

@@ -132,7 +132,6 @@ fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: us
     Welded { id, first: table.first, corners_at: table.corners_at }
 }
 
-/// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
 /// [`weld`] of corners read from indexed source vertices (corner `c` at `positions[index[c]]`, bit for bit):
 /// welds the sources, one per vertex rather than one per corner, then numbers each corner's position in order
 /// of first appearance as [`weld`] of the corners would, so the result is the same.
@@ -158,6 +157,7 @@ pub(crate) fn weld_indexed(positions: &[[f32; 3]], index: &[u32]) -> Welded {
     welded
 }
 
+/// A slot of the welding table: a position's key and number, or [`EMPTY`] as the number.
 #[derive(Clone, Copy)]
 struct Slot<K> {
     key: K,
