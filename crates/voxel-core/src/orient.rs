@@ -147,7 +147,7 @@ impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
     pub(crate) fn find(tris: &[GridTriangle]) -> Self {
         let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
-        Self::of_welded(&welded.id, &welded.corners_at).with_facing(|t| tris[t])
+        Self::of_welded(&welded.id, welded.first.len()).with_facing(|t| tris[t])
     }
 
     /// Finds which way each closed part faces from the corners of its triangles (`corners` of triangle `t`,
@@ -166,10 +166,10 @@ impl Parts {
     }
 
     /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
-    /// (`corners_at[p]` corners at position `p`). Depends only on which corners share a position and on the triangle
-    /// order: ties and non-manifold edges are decided in triangle and corner order.
-    pub(crate) fn of_welded(id: &[u32], corners_at: &[u32]) -> Self {
-        let edges = Edges::of(id, corners_at);
+    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle order:
+    /// ties and non-manifold edges are decided in triangle and corner order.
+    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
+        let edges = Edges::of(id, positions);
         let mut sheets = Sheets::of(id, &edges.partner);
         for &c in &edges.border {
             let s = sheets.of[c as usize / 3] as usize;

@@ -39,7 +39,7 @@ impl SoupParts {
         // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
         // lose its volume to rounding.
         let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
-        let parts = Parts::of_welded(&welded.id, &welded.corners_at)
+        let parts = Parts::of_welded(&welded.id, welded.first.len())
             .with_facing(|t| [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin));
         Self { parts: Arc::new(parts), first: welded.first }
     }
@@ -169,8 +169,8 @@ mod tests {
         assert_eq!((parts.count, soup.closed_parts().parts.count), (1, 0));
     }
 
-    fn welded_fields(w: Welded) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-        (w.id, w.first, w.corners_at)
+    fn welded_fields(w: Welded) -> (Vec<u32>, Vec<u32>) {
+        (w.id, w.first)
     }
 
     #[test]

@@ -8,8 +8,6 @@ pub(crate) struct Welded {
     pub id: Vec<u32>,
     /// The first corner at each position.
     pub first: Vec<u32>,
-    /// The number of corners at each position.
-    pub corners_at: Vec<u32>,
 }
 
 /// A grid-space position's key (−0 and +0 alike).
@@ -127,9 +125,8 @@ fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: us
             Ok(id) => id,
             Err(empty) => table.insert(empty, key, c as u32),
         };
-        table.corners_at[*id as usize] += 1;
     }
-    Welded { id, first: table.first, corners_at: table.corners_at }
+    Welded { id, first: table.first }
 }
 
 /// [`weld`] of corners read from indexed source vertices (corner `c` at `positions[index[c]]`, bit for bit):
@@ -139,20 +136,14 @@ pub(crate) fn weld_indexed(positions: &[[f32; 3]], index: &[u32]) -> Welded {
     // Source vertices are mostly at different positions: room for all of them.
     let sources = weld_with_room(positions, |&p| soup_key(p), positions.len());
     let mut renumbered = vec![EMPTY; sources.first.len()];
-    let mut welded = Welded {
-        id: vec![0; index.len()],
-        first: Vec::with_capacity(sources.first.len()),
-        corners_at: Vec::with_capacity(sources.first.len()),
-    };
+    let mut welded = Welded { id: vec![0; index.len()], first: Vec::with_capacity(sources.first.len()) };
     for (c, (&source, id)) in index.iter().zip(&mut welded.id).enumerate() {
         let position = &mut renumbered[sources.id[source as usize] as usize];
         if *position == EMPTY {
             *position = welded.first.len() as u32;
             welded.first.push(c as u32);
-            welded.corners_at.push(0);
         }
         *id = *position;
-        welded.corners_at[*id as usize] += 1;
     }
     welded
 }
@@ -171,8 +162,6 @@ struct Table<K> {
     bits: u32,
     /// The first corner at each position, by number.
     first: Vec<u32>,
-    /// The number of corners at each position so far, by number.
-    corners_at: Vec<u32>,
 }
 
 impl<K: Key> Table<K> {
@@ -180,7 +169,7 @@ impl<K: Key> Table<K> {
     fn with_room(positions: usize) -> Self {
         let bits = table_bits(positions);
         let slots = vec![Slot { key: K::default(), id: EMPTY }; 1 << bits];
-        Self { slots, bits, first: Vec::with_capacity(positions), corners_at: Vec::with_capacity(positions) }
+        Self { slots, bits, first: Vec::with_capacity(positions) }
     }
 
     /// The number of the position `key`, or the empty slot where it goes.
@@ -206,7 +195,6 @@ impl<K: Key> Table<K> {
         let id = self.first.len() as u32;
         self.slots[slot] = Slot { key, id };
         self.first.push(corner);
-        self.corners_at.push(0);
         if 3 * self.first.len() > 2 * self.slots.len() {
             self.grow();
         }
@@ -237,7 +225,7 @@ mod tests {
     fn equal_positions_and_signed_zeros_share_a_number_in_order_of_first_appearance() {
         let corners = [[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [0.0, 1.0, 2.5], [0.0, 1.0, 2.0]];
         let welded = weld(&corners, |&p| soup_key(p));
-        assert_eq!((welded.id, welded.first, welded.corners_at), (vec![0, 0, 1, 0], vec![0, 2], vec![3, 1]));
+        assert_eq!((welded.id, welded.first), (vec![0, 0, 1, 0], vec![0, 2]));
         // Many keys, few distinct: the table's probing finds every repeat.
         let many: Vec<DVec3> = (0..20_000).map(|i| DVec3::new((i % 97) as f64, (i % 89) as f64 * 0.5, 1.0)).collect();
         let welded = weld(&many, |&p| grid_key(p));
