@@ -82,22 +82,15 @@ fn hashes_all_different(count: usize, hashes: impl Iterator<Item = u64>) -> bool
     true
 }
 
-/// Whether the `count` keys `keys` are all different: an open-addressing table of the keys themselves,
-/// left at the first repeat.
+/// Whether the `count` keys `keys` are all different: welds them (a table of the keys themselves), left at
+/// the first repeat.
 fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
-    let bits = table_bits(count);
-    let mut slots: Vec<Option<K>> = vec![None; 1 << bits];
-    let mask = slots.len() - 1;
-    for key in keys {
-        let mut slot = (key.hash() >> (64 - bits)) as usize;
-        loop {
-            match slots[slot] {
-                None => {
-                    slots[slot] = Some(key);
-                    break;
-                }
-                Some(other) if other == key => return false,
-                Some(_) => slot = (slot + 1) & mask,
+    let mut table = Table::with_room(count);
+    for (c, key) in keys.enumerate() {
+        match table.find(key) {
+            Ok(_) => return false,
+            Err(slot) => {
+                table.insert(slot, key, c as u32);
             }
         }
     }
