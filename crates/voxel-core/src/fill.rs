@@ -31,7 +31,7 @@ use obvhs::aabb::Aabb;
 use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
-use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, has_projected_area};
+use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, projected_orientation};
 use crate::grid::{BitGrid, GridSpec};
 use crate::orient::{Role, closed_parts, winding_roles};
 use crate::radix::{self, Segments};
@@ -115,12 +115,6 @@ fn triangles_per_task(count: usize) -> usize {
 /// Rows of at least this many columns are searched for the ends of their covered run instead of testing every
 /// column.
 const SEARCHED_ROW: usize = 8;
-
-/// Whether the projection of triangle `t` on the XY plane runs counter-clockwise, or `None` when it has zero
-/// area (then it covers no column).
-fn projected_orientation(t: &GridTriangle) -> Option<bool> {
-    has_projected_area(t).then(|| edge_side(t[0], t[1], [t[2].x, t[2].y]))
-}
 
 /// The columns of `ys` in the row of column centres x = `px` that triangle `t` covers ([`covers_column`]);
 /// `ys` lies within the triangle's extent along y and `counter_clockwise` is its [`projected_orientation`].

@@ -34,7 +34,7 @@ pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
     if outside(t[0].x, t[1].x, t[2].x, p[0]) || outside(t[0].y, t[1].y, t[2].y, p[1]) {
         return false;
     }
-    if !has_projected_area(t) {
+    if projected_orientation(t).is_none() {
         return false;
     }
     let s0 = edge_side(t[0], t[1], p);
@@ -43,11 +43,13 @@ pub fn covers_column(t: &GridTriangle, p: [f64; 2]) -> bool {
     s0 == s1 && s1 == s2
 }
 
-/// Whether the triangle's projection on the XY plane has non-zero area (decided exactly).
+/// Whether the projection of triangle `t` on the XY plane runs counter-clockwise, or `None` when it has zero
+/// area, decided exactly (then it covers no column).
 #[inline]
-pub(crate) fn has_projected_area(t: &GridTriangle) -> bool {
+pub(crate) fn projected_orientation(t: &GridTriangle) -> Option<bool> {
     let xy = |v: DVec3| Coord { x: v.x, y: v.y };
-    orient2d(xy(t[0]), xy(t[1]), xy(t[2])) != 0.0
+    let o = orient2d(xy(t[0]), xy(t[1]), xy(t[2]));
+    (o != 0.0).then_some(o > 0.0)
 }
 
 /// The z where the triangle's plane meets the column through `p` (the triangle must cover the column).

@@ -137,23 +137,26 @@ pub(crate) struct Parts {
     /// Whether each triangle is reversed relative to its sheet's orientation (the one most of the sheet's
     /// triangles have in the file).
     reversed: Vec<bool>,
-    /// The number of closed parts.
-    count: usize,
     /// Per closed part: whether it faces inwards (its signed volume, its sheets oriented, is negative).
     inward: Vec<bool>,
 }
 
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
-    pub(crate) fn find(tris: &[GridTriangle]) -> Self {
+    fn find(tris: &[GridTriangle]) -> Self {
         let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
-        Self::of_welded(&welded.id, welded.first.len()).with_facing(|t| tris[t])
+        Self::of_welded(&welded.id, welded.first.len(), |t| tris[t])
+    }
+
+    /// The number of closed parts.
+    fn count(&self) -> usize {
+        self.inward.len()
     }
 
     /// Finds which way each closed part faces from the corners of its triangles (`corners` of triangle `t`,
     /// from any origin: a closed surface's signed volume does not depend on it).
     fn with_facing(mut self, corners: impl Fn(usize) -> [DVec3; 3]) -> Self {
-        let mut volume = vec![0.0f64; self.count];
+        let mut volume = vec![0.0f64; self.count()];
         for (t, (&part, &reversed)) in self.of.iter().zip(&self.reversed).enumerate() {
             if part != NO_PART {
                 let [a, b, c] = corners(t);
@@ -166,16 +169,17 @@ impl Parts {
     }
 
     /// Finds the closed parts of triangles whose corners (three per triangle) are at the positions `id`
-    /// (numbered below `positions`). Depends only on which corners share a position and on the triangle order:
-    /// ties and non-manifold edges are decided in triangle and corner order.
-    pub(crate) fn of_welded(id: &[u32], positions: usize) -> Self {
+    /// (numbered below `positions`), and which way each faces from the corners' coordinates (`corners` of
+    /// triangle `t`). The parts depend only on which corners share a position and on the triangle order: ties
+    /// and non-manifold edges are decided in triangle and corner order.
+    fn of_welded(id: &[u32], positions: usize, corners: impl Fn(usize) -> [DVec3; 3]) -> Self {
         let edges = Edges::of(id, positions);
         let mut sheets = Sheets::of(id, &edges.partner);
         for &c in &edges.border {
             let s = sheets.of[c as usize / 3] as usize;
             sheets.open[s] = true;
         }
-        Self::close(id, sheets, &edges)
+        Self::close(id, sheets, &edges).with_facing(corners)
     }
 
     /// Drops the sheets that cannot be part of a closed surface, then joins the rest into parts across
@@ -232,7 +236,7 @@ impl Parts {
             }
         }
         let of = sheet_of.iter().map(|&s| if s == NO_PART { NO_PART } else { part_of_sheet[s as usize] }).collect();
-        Self { of, reversed, count: count as usize, inward: Vec::new() }
+        Self { of, reversed, inward: vec![false; count as usize] }
     }
 }
 
@@ -341,7 +345,6 @@ pub(crate) fn winding_roles(
     }
     let parts = closed_parts();
     let inward = &parts.inward;
-    debug_assert_eq!(inward.len(), parts.count, "closed parts without their facing");
     let mut roles = as_in_file;
     for ((role, &part), &reversed) in roles.iter_mut().zip(&parts.of).zip(&parts.reversed) {
         *role = match part {
@@ -368,7 +371,9 @@ pub(crate) fn winding_roles(
 /// that work is already over (`settled`: then the fill has run the analysis itself if it needed it). A soup
 /// that the hint misses is analysed when its columns show the need, as before.
 pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicBool) {
-    if !soup.has_closed_parts() && facing_unbalanced(soup) && !settled.load(Ordering::Relaxed) {
+    // `settled` is asked again after the hint's pass over the triangles.
+    let over = || settled.load(Ordering::Relaxed);
+    if !over() && !soup.has_closed_parts() && facing_unbalanced(soup) && !over() {
         soup.closed_parts();
     }
 }
@@ -472,7 +477,7 @@ mod tests {
     #[test]
     fn a_box_is_one_closed_part_and_its_bottom_enters() {
         let parts = Parts::find(&grid_tris(&block()));
-        assert_eq!((parts.count, parts.of.iter().all(|&p| p == 0)), (1, true));
+        assert_eq!((parts.count(), parts.of.iter().all(|&p| p == 0)), (1, true));
         // The bottom (normal −Z) enters, the top leaves; the sides are edge-on (the last four triangles are
         // the horizontal faces).
         let r = roles(&block());
@@ -493,7 +498,7 @@ mod tests {
         // in the file), whatever the order of the joins; the part is then inside out, on its own, and flipped.
         let half = reversed(block(), 2);
         let parts = Parts::find(&grid_tris(&half));
-        assert_eq!(parts.count, 1);
+        assert_eq!(parts.count(), 1);
         assert_eq!(parts.reversed, (0..12).map(|t| t % 2 == 1).collect::<Vec<_>>());
         assert_eq!(roles(&half)[8..], roles(&block())[8..]);
     }
@@ -568,12 +573,12 @@ mod tests {
         let other = cuboid([1.0; 3], [2.0; 3]);
         two.positions.extend(&other.positions);
         two.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + 8)));
-        assert_eq!(Parts::find(&grid_tris(&two)).count, 2);
+        assert_eq!(Parts::find(&grid_tris(&two)).count(), 2);
         let mut fin = cuboid([0.0; 3], [1.0; 3]);
         fin.positions.push([0.5, -0.5, 1.5]);
         fin.triangles.push([4, 5, 8]);
         let parts = Parts::find(&grid_tris(&fin));
-        assert_eq!(parts.count, 1);
+        assert_eq!(parts.count(), 1);
         assert_eq!(parts.of[..12], [0; 12]);
         assert_eq!(parts.of[12], NO_PART);
     }

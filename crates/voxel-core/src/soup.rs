@@ -252,7 +252,8 @@ impl TriangleSoup {
 
     /// The source vertices of every corner, when the soup was built from indexed vertices only.
     pub(crate) fn sources(&self) -> Option<&SourceVertices> {
-        let sources = self.sources.as_ref().filter(|s| s.index.len() == self.vertices.len())?;
+        let sources = self.sources.as_ref()?;
+        debug_assert_eq!(sources.index.len(), self.vertices.len(), "a corner without a source vertex");
         debug_assert!(self.vertices.iter().zip(&sources.index).all(|(v, &i)| {
             sources.positions.get(i as usize).is_some_and(|p| p.map(f32::to_bits) == v.position.map(f32::to_bits))
         }));

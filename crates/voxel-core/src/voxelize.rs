@@ -174,7 +174,7 @@ fn voxelize_within_timed(
             Ok((spec, tris, fill, shell, prepared + fill_time, shell_time))
         },
         || {
-            if options.fill == FillMode::Winding && !settled.load(Ordering::Relaxed) {
+            if options.fill == FillMode::Winding {
                 analyse_parts_if_unbalanced(soup, &settled);
             }
         },

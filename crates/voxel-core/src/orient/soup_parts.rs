@@ -39,8 +39,9 @@ impl SoupParts {
         // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
         // lose its volume to rounding.
         let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
-        let parts = Parts::of_welded(&welded.id, welded.first.len())
-            .with_facing(|t| [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin));
+        let parts = Parts::of_welded(&welded.id, welded.first.len(), |t| {
+            [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin)
+        });
         Self { parts: Arc::new(parts), first: welded.first }
     }
 
@@ -106,7 +107,7 @@ mod tests {
         for (gap, count) in [(0.0, 1), (0.25, 0)] {
             let soup = boxes(gap);
             let first = closed_parts(&soup, &grid_tris(&soup, 4));
-            assert_eq!(first.count, count);
+            assert_eq!(first.count(), count);
             for r in [4, 16, 64] {
                 let tris = grid_tris(&soup, r);
                 let parts = closed_parts(&soup, &tris);
@@ -128,7 +129,7 @@ mod tests {
             v.position[0] = 1.0;
         }
         let tris = grid_tris(&moved, 16);
-        assert_eq!(closed_parts(&moved, &tris).count, 1);
+        assert_eq!(closed_parts(&moved, &tris).count(), 1);
         assert_eq!(*closed_parts(&moved, &tris), Parts::find(&tris));
         assert!(Arc::ptr_eq(&closed_parts(&soup, &grid_tris(&soup, 16)), &open));
     }
@@ -166,7 +167,7 @@ mod tests {
         let tris = grid_tris(&soup, 4);
         let parts = closed_parts(&soup, &tris);
         assert_eq!(*parts, Parts::find(&tris));
-        assert_eq!((parts.count, soup.closed_parts().parts.count), (1, 0));
+        assert_eq!((parts.count(), soup.closed_parts().parts.count()), (1, 0));
     }
 
     fn welded_fields(w: Welded) -> (Vec<u32>, Vec<u32>) {
