@@ -16,8 +16,8 @@
 //! one voxelization's instructions. It prints a hash of the outputs per R (to compare two builds).
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- pass-runs NAME R N` voxelizes the first model whose name
-//! contains NAME N times at R (solid, default settings) and prints the median fill, shell and colour pass
-//! times; nothing else runs, so under cachegrind (as for `fill-runs`) (Ir at N − Ir at 0) / N is one
+//! contains NAME N times at R (or `default`; solid, default settings) and prints the median fill, shell and
+//! colour pass times; nothing else runs, so under cachegrind (as for `fill-runs`) (Ir at N − Ir at 0) / N is one
 //! voxelization's instructions.
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- first-runs NAME R N [hollow]` voxelizes the first model whose
@@ -133,6 +133,16 @@ fn grid_arg(r: &str) -> GridSize {
     }
 }
 
+/// The `N` words after the mode word at `args[at]`.
+fn mode_args<'a, const N: usize>(args: &'a [String], at: usize, usage: &str) -> [&'a str; N] {
+    std::array::from_fn(|k| args.get(at + 1 + k).unwrap_or_else(|| panic!("usage: {usage}")).as_str())
+}
+
+/// The first model of `files` whose path contains `name`.
+fn model_named<'a>(files: &'a [PathBuf], name: &str) -> &'a std::path::Path {
+    files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model")
+}
+
 /// Prints the median wall time of `runs` first parity and first winding voxelizations of `soup` at `r`
 /// (interleaved, each on a fresh copy of the soup that knows nothing of its parts yet) and their ratio.
 fn print_first_runs(name: &str, file: &std::path::Path, r: &str, runs: usize, hollow: bool) {
@@ -176,7 +186,8 @@ fn main() {
         return;
     }
     println!("threads: {}", rayon::current_num_threads());
-    if std::env::args().skip(1).any(|a| a == "passes") {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "passes") {
         println!("| model | triangles | R | visible | fill ms | shell ms | colour ms | colour / shell |");
         println!("|---|---:|---:|---:|---:|---:|---:|---:|");
         for_each_model(&files, &dir, |name, soup| print_passes(name, soup, 7));
@@ -189,13 +200,11 @@ fn main() {
         print_passes("cube without its +x face, built", &TriangleSoup::from_mesh(&open, [1.0; 4]), 7);
         return;
     }
-    let args: Vec<String> = std::env::args().skip(1).collect();
     if let Some(at) = args.iter().position(|a| a == "fill-runs") {
-        let [name, r, fill, n] = [1, 2, 3, 4].map(|k| args.get(at + k).expect("fill-runs NAME R FILL N").as_str());
+        let [name, r, fill, n] = mode_args(&args, at, "fill-runs NAME R FILL N");
         let fill = if fill == "parity" { FillMode::Parity } else { FillMode::Winding };
         let options = |r: &str| VoxelizeOptions { grid: grid_arg(r), fill, ..Default::default() };
-        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
-        let soup = load_file(file).expect("load");
+        let soup = load_file(model_named(&files, name)).expect("load");
         let resolutions: Vec<&str> = r.split(',').collect();
         let mut hashers = vec![std::hash::DefaultHasher::new(); resolutions.len()];
         for _ in 0..n.parse().expect("N") {
@@ -209,17 +218,15 @@ fn main() {
         return;
     }
     if let Some(at) = args.iter().position(|a| a == "first-runs") {
-        let [name, r, n] = [1, 2, 3].map(|k| args.get(at + k).expect("first-runs NAME R N").as_str());
-        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
+        let [name, r, n] = mode_args(&args, at, "first-runs NAME R N [hollow]");
         let hollow = args.get(at + 4).is_some_and(|a| a == "hollow");
-        print_first_runs(name, file, r, n.parse().expect("N"), hollow);
+        print_first_runs(name, model_named(&files, name), r, n.parse().expect("N"), hollow);
         return;
     }
     if let Some(at) = args.iter().position(|a| a == "pass-runs") {
-        let [name, r, n] = [1, 2, 3].map(|k| args.get(at + k).expect("pass-runs NAME R N").as_str());
-        let options = VoxelizeOptions { grid: GridSize::Resolution(r.parse().expect("R")), ..Default::default() };
-        let file = files.iter().find(|f| f.to_string_lossy().contains(name)).expect("no such model");
-        let soup = load_file(file).expect("load");
+        let [name, r, n] = mode_args(&args, at, "pass-runs NAME R N");
+        let options = VoxelizeOptions { grid: grid_arg(r), ..Default::default() };
+        let soup = load_file(model_named(&files, name)).expect("load");
         let times: Vec<PassTimes> =
             (0..n.parse().expect("N")).map(|_| voxelize_timed(&soup, &options).expect("voxelize").1).collect();
         if !times.is_empty() {
@@ -228,11 +235,11 @@ fn main() {
         }
         return;
     }
-    if std::env::args().skip(1).any(|a| a == "hashes") {
+    if args.iter().any(|a| a == "hashes") {
         for_each_model(&files, &dir, print_hashes);
         return;
     }
-    if std::env::args().skip(1).any(|a| a == "fill-cost") {
+    if args.iter().any(|a| a == "fill-cost") {
         println!("| model | triangles | R | parity ms | winding ms | winding / parity |");
         println!("|---|---:|---:|---:|---:|---:|");
         for_each_model(&files, &dir, |name, soup| print_fill_cost(name, soup, 9));

@@ -28,18 +28,22 @@ pub fn median(mut values: Vec<f64>) -> f64 {
 
 /// One warm-up voxelization, then the medians of `runs`; also the grid of the last one.
 pub fn measure(soup: &TriangleSoup, options: &VoxelizeOptions, runs: usize) -> (Timing, [u32; 3]) {
-    measure_each(soup, &vec![soup; runs], options)
+    let grid = voxelize(soup, options).expect("voxelize").stats.grid;
+    let (timing, last) = measure_each(std::iter::repeat_n(soup, runs), options);
+    (timing, last.unwrap_or(grid))
 }
 
-/// One warm-up voxelization of `warm_up`, then the medians of one voxelization of each of `soups`; also the
-/// grid of the last one.
-pub fn measure_each(warm_up: &TriangleSoup, soups: &[&TriangleSoup], options: &VoxelizeOptions) -> (Timing, [u32; 3]) {
-    let mut grid = voxelize(warm_up, options).expect("voxelize").stats.grid;
+/// The medians of one voxelization of each of `soups` (no warm-up); also the grid of the last one.
+pub fn measure_each<'a>(
+    soups: impl IntoIterator<Item = &'a TriangleSoup>,
+    options: &VoxelizeOptions,
+) -> (Timing, Option<[u32; 3]>) {
+    let mut grid = None;
     let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     for soup in soups {
         let cpu_start = crate::cpu::cpu_ns();
         let started = Instant::now();
-        grid = voxelize(soup, options).expect("voxelize").stats.grid;
+        grid = Some(voxelize(soup, options).expect("voxelize").stats.grid);
         wall.push(started.elapsed().as_secs_f64() * 1e3);
         cpu.push(cpu_start.zip(crate::cpu::cpu_ns()).map_or(f64::NAN, |(a, b)| (b - a) as f64 / 1e6));
     }
