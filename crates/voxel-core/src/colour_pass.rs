@@ -107,14 +107,15 @@ pub(crate) fn surface_colors(
                     k += 1;
                 }
                 let own: &[u32] = if shell.cells.get(k) == Some(&i) { shell.triangles_at(k) } else { &[] };
-                let p = centre(coords.of(i));
+                let cell = coords.of(i);
+                let p = centre(cell);
                 let nearest = match *own {
                     // One candidate is the nearest: no distance to compare.
                     [t] => Some((t as usize, closest_point_barycentric(p, &tris[t as usize]))),
                     _ => nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
                         let faces = FACE_STEPS.into_iter().zip(&mut face_at);
                         let near = faces.filter_map(|(step, at)| {
-                            let found = search_near(&shell.cells, *at, spec.offset(i as usize, step)? as u32);
+                            let found = search_near(&shell.cells, *at, spec.neighbour(cell, step)? as u32);
                             *at = found.unwrap_or_else(|insert| insert);
                             found.ok()
                         });

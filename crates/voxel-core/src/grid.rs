@@ -184,7 +184,13 @@ impl GridSpec {
     /// The index of the cell at `index + step`, if inside the grid.
     #[inline]
     pub fn offset(&self, index: usize, step: [i32; 3]) -> Option<usize> {
-        self.step(self.coords(index), step).map(|c| self.index(c[0], c[1], c[2]))
+        self.neighbour(self.coords(index), step)
+    }
+
+    /// The index of the cell at `cell + step`, if inside the grid.
+    #[inline]
+    pub fn neighbour(&self, cell: [u32; 3], step: [i32; 3]) -> Option<usize> {
+        self.step(cell, step).map(|c| self.index(c[0], c[1], c[2]))
     }
 
     /// The cell at `cell + step`, if inside the grid.

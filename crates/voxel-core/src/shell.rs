@@ -58,7 +58,7 @@ impl Shell {
             self.triangles_at(k).iter().any(|&tri| {
                 let t = &tris[tri as usize];
                 let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
-                [step, step.map(|s| -s)].into_iter().all(|s| !Neighbour::new(spec, s).filled(spec, fill, c, index))
+                [step, step.map(|s| -s)].into_iter().all(|s| !spec.neighbour(c, s).is_some_and(|n| fill.get(n)))
             })
         };
         (0..self.cells.len())
@@ -78,6 +78,18 @@ const THIN_CHUNK: usize = 4096;
 fn normal_step(n: DVec3) -> [i32; 3] {
     let m = n.abs().max_element();
     [n.x, n.y, n.z].map(|c| if c.abs() >= 0.5 * m { c.signum() as i32 } else { 0 })
+}
+
+/// The axis along which the normal `n` is largest (the first of equals).
+fn dominant_axis(n: DVec3) -> usize {
+    let an = n.abs();
+    if an.x >= an.y && an.x >= an.z {
+        0
+    } else if an.y >= an.z {
+        1
+    } else {
+        2
+    }
 }
 
 /// One (cell, triangle) overlap packed for sorting: cell, then triangle.
@@ -181,14 +193,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segmen
         push(first);
         return;
     }
-    let an = n.abs();
-    let d = if an.x >= an.y && an.x >= an.z {
-        0
-    } else if an.y >= an.z {
-        1
-    } else {
-        2
-    };
+    let d = dominant_axis(n);
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let n = n.to_array();
     // Placing the footprints pays for itself only where some lie well inside or outside the projection; a
@@ -234,26 +239,6 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segmen
                 }
             }
         }
-    }
-}
-
-/// The cell one step along a fixed direction from the cells of a triangle.
-struct Neighbour {
-    step: [i32; 3],
-    /// The difference of the linear indices.
-    delta: isize,
-}
-
-impl Neighbour {
-    fn new(spec: &GridSpec, step: [i32; 3]) -> Self {
-        let [_, ny, nz] = spec.dims.map(|n| n as isize);
-        Self { step, delta: (step[0] as isize * ny + step[1] as isize) * nz + step[2] as isize }
-    }
-
-    /// Whether the neighbour of cell `c` (at linear index `index`) exists and is filled.
-    #[inline]
-    fn filled(&self, spec: &GridSpec, fill: &BitGrid, c: [u32; 3], index: usize) -> bool {
-        spec.step(c, self.step).is_some() && fill.get(index.wrapping_add_signed(self.delta))
     }
 }
 
@@ -314,14 +299,7 @@ mod tests {
         for _ in 0..200 {
             let t: GridTriangle = std::array::from_fn(|_| DVec3::new(next(12.0), next(12.0), next(12.0)));
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
-            let an = n.abs();
-            let d = if an.x >= an.y && an.x >= an.z {
-                0
-            } else if an.y >= an.z {
-                1
-            } else {
-                2
-            };
+            let d = dominant_axis(n);
             let (u, v) = ((d + 1) % 3, (d + 2) % 3);
             let corners = t.map(|w| w.to_array());
             let (tester, inside) = (BoxTester::new(&t), FootprintTest::new(&corners, n[d].signum(), u, v));
