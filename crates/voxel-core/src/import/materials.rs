@@ -141,7 +141,7 @@ impl MaterialCache {
     /// reported when a material that uses the image is resolved, as without this).
     pub fn prefetch<'a>(&mut self, meshes: impl Iterator<Item = gltf::Mesh<'a>>, buffers: &Buffers) {
         let mut wanted: Vec<gltf::Image<'_>> = meshes
-            .flat_map(|mesh| mesh.primitives().collect::<Vec<_>>())
+            .flat_map(|mesh| mesh.primitives())
             .filter(super::has_surface)
             .filter_map(|prim| prim.material().pbr_metallic_roughness().base_color_texture())
             .map(|info| info.texture().source())
