@@ -240,7 +240,16 @@ pub(super) fn plugin(app: &mut App) {
     );
 }
 
+/// Triangles the voxels submit to one pass a frame: every voxel that shows draws the whole voxel mesh.
+pub fn triangles_per_frame(world: &mut World) -> u64 {
+    let mesh = world.resource::<VoxelAssets>().mesh.id();
+    let per_voxel = world.resource::<Assets<Mesh>>().get(mesh).and_then(|m| m.indices()).map_or(0, |i| i.len() / 3);
+    let mut voxels = world.query_filtered::<&Visibility, With<VoxelSlot>>();
+    let shown = voxels.iter(world).filter(|v| **v != Visibility::Hidden).count();
+    (per_voxel * shown) as u64
+}
+
 /// Rendering: the material's pipeline.
-pub(super) fn render_plugin(app: &mut App) {
+pub fn render_plugin(app: &mut App) {
     app.add_plugins(MaterialPlugin::<VoxelMaterial>::default());
 }
