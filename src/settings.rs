@@ -81,8 +81,8 @@ impl Default for VoxelSettings {
 }
 
 impl VoxelSettings {
-    /// The smallest and largest grid sizes the panel offers.
-    pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.08..=0.6;
+    /// The smallest and largest grid sizes the panel offers (0.03: about 256 cells along a model's longest side).
+    pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.03..=0.6;
 
     /// The voxelizer options these settings ask for in `style`.
     pub fn voxelize_options(&self, style: Style) -> VoxelizeOptions {
@@ -93,8 +93,9 @@ impl VoxelSettings {
             // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
             hollow: false,
             pastel: self.pastel,
-            // The app keeps voxel counts interactive: at most 4 M cells in a grid.
-            max_cells: 1 << 22,
+            // Room for the finest grid (0.03 on the 9-unit diagonal: at most 300 cells along it); what the app
+            // draws is capped by `MAX_DRAWN` voxels instead.
+            max_cells: 1 << 25,
             ..VoxelizeOptions::default()
         }
     }

@@ -40,8 +40,8 @@ fn noop_renderer() -> RenderCreation {
         backend_options: wgpu::BackendOptions { noop: wgpu::NoopBackendOptions { enable: true }, ..default() },
         ..wgpu::InstanceDescriptor::new_without_display_handle()
     });
-    let adapter =
-        bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default())).expect("no-op adapter");
+    let adapter = bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+        .expect("no-op adapter");
     let mut features = adapter.features();
     features.remove(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
     features.remove(wgpu::Features::all_experimental_mask());
@@ -98,7 +98,8 @@ fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
             .map(|m| app.world_mut().resource_mut::<Assets<VoxelModelAsset>>().add(VoxelModelAsset(m)))
             .collect();
         let mut library = app.world_mut().resource_mut::<ModelLibrary>();
-        library.entries = handles.into_iter().enumerate().map(|(i, h)| super::entry(&format!("model {i}"), h)).collect();
+        library.entries =
+            handles.into_iter().enumerate().map(|(i, h)| super::entry(&format!("model {i}"), h)).collect();
         library.current = 0;
         for _ in 0..600 {
             app.update();
