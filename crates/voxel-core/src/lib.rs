@@ -14,6 +14,8 @@ pub mod bvh;
 pub mod cli;
 #[cfg(feature = "cli")]
 pub mod cli_animation;
+#[cfg(feature = "cli")]
+pub mod cli_palette;
 pub mod color;
 mod colour_pass;
 pub mod error;
@@ -26,6 +28,7 @@ pub mod import;
 pub mod inputs;
 pub mod model;
 mod orient;
+pub mod palette;
 mod radix;
 pub mod shapes;
 mod shell;
