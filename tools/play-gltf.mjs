@@ -1,17 +1,18 @@
 // three.js's GLTFLoader and AnimationMixer on an animated voxel export, run on demand (not part of CI):
 //   npm install --prefix /tmp/gltf-tools three
 //   cd /tmp/gltf-tools && node /path/to/voxel-art/tools/play-gltf.mjs FILE.glb [STEPS]
-// Loads the file, plays its first animation and samples it at STEPS evenly spaced times over one loop
-// (default: two samples per key), printing at each time which of the root's children is shown (scale ≠ 0).
+// A .glb only (Node cannot fetch a .gltf's .bin). Loads the file, plays its first animation and samples it
+// at STEPS evenly spaced times over one loop (default: two samples per key), printing at each time which of
+// the root's children is shown (scale ≠ 0).
 // The exit status is 1 unless exactly one child shows at every sample and each child shows at some time.
-import { createRequire } from 'node:module';
 import { readFileSync } from 'node:fs';
 import { pathToFileURL } from 'node:url';
 import { join } from 'node:path';
 
-const require = createRequire(join(process.cwd(), 'package.json'));
-const THREE = await import(pathToFileURL(require.resolve('three')).href);
-const { GLTFLoader } = await import(pathToFileURL(require.resolve('three/examples/jsm/loaders/GLTFLoader.js')).href);
+// The ES module build, the one GLTFLoader itself imports.
+const three = join(process.cwd(), 'node_modules', 'three');
+const THREE = await import(pathToFileURL(join(three, 'build/three.module.js')).href);
+const { GLTFLoader } = await import(pathToFileURL(join(three, 'examples/jsm/loaders/GLTFLoader.js')).href);
 
 const [file, stepsArg] = process.argv.slice(2);
 const bytes = readFileSync(file);
