@@ -91,3 +91,68 @@ fn a_webp_source_that_is_not_an_image_is_named() {
     let err = load_slice(&glb(&doc, &bin), None).unwrap_err().to_string();
     assert!(err.contains("texture 0: EXT_texture_webp source 7 is not one of the file's 2 images"), "{err}");
 }
+
+/// A unit square textured with `image` (a file of tests/data): a .gltf whose buffer is a data URI.
+fn textured_square(image: &str, webp: bool) -> Vec<u8> {
+    use base64::Engine;
+    let mut bin = Vec::new();
+    let corners = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
+    for c in corners.iter().flatten() {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    for [x, _, z] in corners {
+        bin.extend_from_slice(&x.to_le_bytes());
+        bin.extend_from_slice(&z.to_le_bytes());
+    }
+    for i in [0u16, 2, 1, 0, 3, 2, 0, 0] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let texture = if webp { json!({"extensions": {"EXT_texture_webp": {"source": 0}}}) } else { json!({"source": 0}) };
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": if webp { json!(["EXT_texture_webp"]) } else { json!([]) },
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [texture],
+        "images": [{"uri": image}],
+        "buffers": [{
+            "byteLength": bin.len(),
+            "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))
+        }],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    });
+    serde_json::to_vec(&doc).unwrap()
+}
+
+#[test]
+fn a_lossy_webp_file_texture_voxelizes_like_its_png_twin_within_8_of_255() {
+    // Made by tools/make-webp-pattern.mjs (our own pattern; libwebp at quality 75).
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let options = at_resolution(32);
+    let load = |image: &str, webp: bool| {
+        let soup = load_slice(&textured_square(image, webp), Some(&data)).unwrap();
+        voxelize(&soup, &options).unwrap()
+    };
+    let from_png = load("webp-pattern.png", false);
+    let from_webp = load("webp-pattern-lossy.webp", true);
+    assert_eq!(from_png.len(), 32 * 32);
+    assert_eq!(cells(&from_png), cells(&from_webp));
+    let (a, b) = (mean_color(&from_png), mean_color(&from_webp));
+    assert!((0..3).all(|k| (a[k] - b[k]).abs() <= 8.0), "{a:?} vs {b:?}");
+    assert!(from_webp.stats.colors >= 4, "the four quadrants: {}", from_webp.stats.colors);
+    // A file URI with no folder to read it from is a named error.
+    let err = load_slice(&textured_square("webp-pattern-lossy.webp", true), None).unwrap_err().to_string();
+    assert!(err.contains("image 0: webp-pattern-lossy.webp (no folder to read it from)"), "{err}");
+}
