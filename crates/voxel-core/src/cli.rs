@@ -294,7 +294,8 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
+        let outcome =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {
@@ -333,7 +334,8 @@ mod tests {
             let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "4", "--json"];
             args.extend(extra);
             let args = VoxelizeArgs::try_parse_from(args).unwrap();
-            serde_json::from_str(&process(&input, &args, &args.options(), &ColorStage::default(), false).unwrap()).unwrap()
+            serde_json::from_str(&process(&input, &args, &args.options(), &ColorStage::default(), false).unwrap())
+                .unwrap()
         };
         let plain = report(&[]);
         assert_eq!(plain["voxels"], 4 * 2 * 2);

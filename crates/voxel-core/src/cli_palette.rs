@@ -207,14 +207,25 @@ mod tests {
         let hex = dir.join("bad.hex");
         std::fs::write(&hex, "ff0000\nnot a colour\n").unwrap();
         let hex = hex.to_str().unwrap();
-        assert_eq!(stage(hex), format!("error: {hex}: not a usable palette: line 2: \"not a colour\" is not a colour rrggbb"));
+        assert_eq!(
+            stage(hex),
+            format!("error: {hex}: not a usable palette: line 2: \"not a colour\" is not a colour rrggbb")
+        );
         let png = dir.join("bad.png");
         std::fs::write(&png, b"GIF89a").unwrap();
         let png = png.to_str().unwrap();
-        assert!(stage(png).starts_with(&format!("error: {png}: not a usable palette: not a readable PNG")), "{}", stage(png));
+        assert!(
+            stage(png).starts_with(&format!("error: {png}: not a usable palette: not a readable PNG")),
+            "{}",
+            stage(png)
+        );
         let missing = dir.join("missing.vox");
         let missing = missing.to_str().unwrap();
-        assert!(stage(missing).starts_with(&format!("error: {missing}: cannot read {missing}: ")), "{}", stage(missing));
+        assert!(
+            stage(missing).starts_with(&format!("error: {missing}: cannot read {missing}: ")),
+            "{}",
+            stage(missing)
+        );
         assert!(stage("nes").starts_with("error: nes: not a usable palette: no palette named \"nes\""));
         let args = VoxelizeArgs::try_parse_from(["voxelize", "x.glb", "--colors", "0"]).unwrap();
         assert_eq!(args.palette.stage().unwrap_err().1.to_string(), "invalid parameter: --colors must be at least 1");

@@ -130,7 +130,14 @@ impl Builder {
             (json::Value::from(lo.to_vec()), json::Value::from(hi.to_vec()))
         });
         let target = target.then_some(json::buffer::Target::ArrayBuffer);
-        self.accessor(offset, values.len(), json::accessor::ComponentType::F32, json::accessor::Type::Vec3, target, bounds)
+        self.accessor(
+            offset,
+            values.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Vec3,
+            target,
+            bounds,
+        )
     }
 
     /// Appends scalar floats (animation times: with their min and max, as glTF requires of sampler inputs).
@@ -142,7 +149,14 @@ impl Builder {
         let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
         let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         let bounds = Some((json::Value::from(vec![lo]), json::Value::from(vec![hi])));
-        self.accessor(offset, values.len(), json::accessor::ComponentType::F32, json::accessor::Type::Scalar, None, bounds)
+        self.accessor(
+            offset,
+            values.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Scalar,
+            None,
+            bounds,
+        )
     }
 
     /// Appends triangle indices, as u16 when every index fits below u16's maximum (which glTF reserves).
@@ -210,8 +224,12 @@ impl Builder {
                 weights: None,
             })
         });
-        let stats =
-            MeshStats { faces: surface.faces, quads: surface.quads.len(), vertices: vertices.positions.len(), bytes: 0 };
+        let stats = MeshStats {
+            faces: surface.faces,
+            quads: surface.quads.len(),
+            vertices: vertices.positions.len(),
+            bytes: 0,
+        };
         (mesh, stats)
     }
 
@@ -296,7 +314,12 @@ pub fn write_gltf(model: &VoxelModel, path: &Path, options: &ExportOptions) -> R
 }
 
 /// Writes a document as a .gltf file and its buffer as a .bin beside it; `bytes` in the result counts both.
-pub(super) fn write_document(mut root: json::Root, bin: Vec<u8>, mut stats: MeshStats, path: &Path) -> Result<MeshStats> {
+pub(super) fn write_document(
+    mut root: json::Root,
+    bin: Vec<u8>,
+    mut stats: MeshStats,
+    path: &Path,
+) -> Result<MeshStats> {
     let bin_path = path.with_extension("bin");
     let export_error = |path: &Path, reason: String| VoxelError::Export { path: path.to_owned(), reason };
     if let Some(buffer) = root.buffers.first_mut() {

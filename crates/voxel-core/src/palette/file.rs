@@ -37,7 +37,9 @@ pub fn read(path: &Path) -> Result<Vec<[u8; 3]>> {
     let colors = first_of_each(colors);
     match colors.len() {
         0 => Err(invalid("the palette has no colours")),
-        n if n > MAX_FILE_COLORS => Err(invalid(format!("the palette has {n} colours, over the limit of {MAX_FILE_COLORS}"))),
+        n if n > MAX_FILE_COLORS => {
+            Err(invalid(format!("the palette has {n} colours, over the limit of {MAX_FILE_COLORS}")))
+        }
         _ => Ok(colors),
     }
 }
@@ -102,7 +104,10 @@ mod tests {
     #[test]
     fn bad_files_are_refused_with_the_reason() {
         let reason = |name: &str, bytes: &[u8]| read(&temp(name, bytes)).unwrap_err().to_string();
-        assert_eq!(reason("b.hex", b"ff0000\nbanana\n"), "not a usable palette: line 2: \"banana\" is not a colour rrggbb");
+        assert_eq!(
+            reason("b.hex", b"ff0000\nbanana\n"),
+            "not a usable palette: line 2: \"banana\" is not a colour rrggbb"
+        );
         assert_eq!(reason("c.hex", b"; nothing\n"), "not a usable palette: the palette has no colours");
         assert!(reason("d.png", b"not a png").starts_with("not a usable palette: not a readable PNG"));
         assert!(reason("e.vox", b"VOX nonsense").starts_with("not a usable palette: not a readable .vox file"));

@@ -158,8 +158,8 @@ mod tests {
 
     /// A 16 × 2 × 2 bar: a grey ramp along x (`16·x` in every channel) but for a bright red slice at x = 7.
     fn ramp() -> VoxelModel {
-        let spec = GridSpec::fit_bounds(([0.0; 3], [16.0, 2.0, 2.0]), 9.0, GridSize::Resolution(16), 1.0, 1 << 20)
-            .unwrap();
+        let spec =
+            GridSpec::fit_bounds(([0.0; 3], [16.0, 2.0, 2.0]), 9.0, GridSize::Resolution(16), 1.0, 1 << 20).unwrap();
         assert_eq!(spec.dims, [16, 2, 2]);
         let cells = (0..16u16).flat_map(|x| {
             (0..2u16).flat_map(move |y| {
@@ -231,7 +231,10 @@ mod tests {
     #[test]
     fn unknown_names_and_zero_colours_are_errors() {
         let err = Palette::from_arg("vga").unwrap_err().to_string();
-        assert!(err.starts_with("not a usable palette: no palette named \"vga\" (built-in: original, pastel, pico8"), "{err}");
+        assert!(
+            err.starts_with("not a usable palette: no palette named \"vga\" (built-in: original, pastel, pico8"),
+            "{err}"
+        );
         let err = stage("pico8", Some(0), false).apply(&mut ramp()).unwrap_err().to_string();
         assert_eq!(err, "invalid parameter: --colors must be at least 1");
     }

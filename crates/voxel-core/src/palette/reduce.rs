@@ -77,7 +77,8 @@ mod tests {
     #[test]
     fn a_small_bright_patch_keeps_its_colour_among_many_greens() {
         // 400 greens (a gradient, 50 cells each) and 12 cells of a bright red.
-        let mut h: Vec<([u8; 3], usize)> = (0..400).map(|i| ([20 + (i % 20) as u8, 100 + (i / 20) as u8 * 5, 30], 50)).collect();
+        let mut h: Vec<([u8; 3], usize)> =
+            (0..400).map(|i| ([20 + (i % 20) as u8, 100 + (i / 20) as u8 * 5, 30], 50)).collect();
         h.push(([250, 20, 40], 12));
         for n in [2, 4, 8] {
             let chosen = representatives(&h, n);

@@ -17,8 +17,15 @@ use crate::common::{cells, model};
 fn write_animated(file: &Path, out: &Path, clip: &str, fps: f32, duration: Option<f32>, r: u32) -> Vec<Value> {
     let options = VoxelizeOptions { grid: GridSize::Resolution(r), ..Default::default() };
     let colors = ColorStage::default();
-    let request =
-        ClipRequest { animation: clip, fps, duration, out: Some(out), format: Format::Vox, json: true, colors: &colors };
+    let request = ClipRequest {
+        animation: clip,
+        fps,
+        duration,
+        out: Some(out),
+        format: Format::Vox,
+        json: true,
+        colors: &colors,
+    };
     let lines = voxelize_clip(file, &request, &options).unwrap();
     lines.iter().map(|l| serde_json::from_str(l).unwrap()).collect()
 }
