@@ -167,7 +167,7 @@ mod tests {
         assert_eq!(line["colors"], 3, "{line}");
         let shown = vox_colors(&vox);
         assert_eq!(shown.len(), 3);
-        let red = [0.95f32, 0.02, 0.02].map(|c| linear_to_srgb(c));
+        let red = [0.95f32, 0.02, 0.02].map(linear_to_srgb);
         assert!(shown.contains(&red), "the one bright box keeps its colour: {shown:?}");
         for palette in ["magicavoxel", "pico8", "pastel"] {
             let line = report(&input, &["--palette", palette, "--colors", "4", "--dither"]);

@@ -40,12 +40,11 @@ impl AnimatedGltf {
 
     /// Adds `model` as the frame shown from `time` seconds on (times ascending; the models in one grid).
     pub fn push_frame(&mut self, model: &VoxelModel, time: f32) -> Result<()> {
-        if let Some(spec) = &self.spec {
-            if *spec != model.spec {
-                return Err(VoxelError::Parameter("the frames of one animated glTF must share one grid".into()));
-            }
+        if self.spec.is_some_and(|spec| spec != model.spec) {
+            return Err(VoxelError::Parameter("the frames of one animated glTF must share one grid".into()));
         }
-        if self.frames.last().is_some_and(|&(_, last)| !(time > last)) {
+        // NaN fails this too.
+        if self.frames.last().is_some_and(|&(_, last)| time.partial_cmp(&last) != Some(std::cmp::Ordering::Greater)) {
             return Err(VoxelError::Parameter(format!("frame times must ascend ({time} s)")));
         }
         let name = format!("{}-{:04}", self.name, self.frames.len());

@@ -26,8 +26,8 @@ pub(super) fn representatives(histogram: &[([u8; 3], usize)], n: usize) -> Vec<[
         }
         let mut sums = vec![([0.0f64; 3], 0.0f64); centres.len()];
         for ((lab, &w), &k) in labs.iter().zip(&weights).zip(&nearest) {
-            for a in 0..3 {
-                sums[k].0[a] += f64::from(lab[a]) * f64::from(w);
+            for (sum, &c) in sums[k].0.iter_mut().zip(lab) {
+                *sum += f64::from(c) * f64::from(w);
             }
             sums[k].1 += f64::from(w);
         }

@@ -58,8 +58,8 @@ fn mean_color(model: &VoxelModel) -> [f64; 3] {
     let mut sum = [0.0f64; 3];
     let mut n = 0.0;
     for v in model.visible_voxels() {
-        for k in 0..3 {
-            sum[k] += f64::from(v.color[k]);
+        for (s, &c) in sum.iter_mut().zip(&v.color) {
+            *s += f64::from(c);
         }
         n += 1.0;
     }
