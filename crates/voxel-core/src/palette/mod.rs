@@ -3,7 +3,7 @@
 //! pattern where a colour falls between them.
 //!
 //! * `original`: the colours as sampled; `pastel`: the article's remap of them ([`crate::color::pastel`]).
-//!   With `max_colors` N, N of those colours chosen in Oklab ([`reduce`]).
+//!   With `max_colors` N, N of those colours chosen by a weighted k-means in Oklab (module `reduce`).
 //! * A fixed palette (built-in, or a `.hex`, `.png` or `.vox` file): each colour becomes the nearest palette
 //!   colour in Oklab; with `max_colors` N, only the N palette colours most used that way are kept.
 //!
