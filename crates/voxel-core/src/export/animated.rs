@@ -8,11 +8,11 @@ use std::path::Path;
 
 use gltf::json::{self, validation::Checked::Valid};
 
-use super::gltf::Builder;
-use super::{ExportOptions, Format, MeshStats};
+use super::Format;
+use super::gltf::{Builder, ExportOptions, MeshStats};
 use crate::error::{Result, VoxelError};
 use crate::grid::GridSpec;
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
 
 /// Builds an animated glTF frame by frame (each frame is meshed when it is added, so only the meshes are
 /// kept).

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use serde_json::Value;
-use voxel_core::cli_animation::{ClipRequest, voxelize_clip};
+use voxel_core::cli::animation::{ClipRequest, voxelize_clip};
 use voxel_core::export::Format;
 use voxel_core::palette::ColorStage;
 use voxel_core::{GridSize, ShellMode, TriangleSoup, VoxelizeOptions, load_animated_file, voxelize_within};

@@ -8,11 +8,17 @@ use std::time::Instant;
 use clap::Parser;
 
 use crate::error::{Result, VoxelError};
-use crate::export::{self, ExportOptions, Format, MeshStats, Written};
+use crate::export::{self, ExportOptions, Format};
 use crate::grid::GridSize;
 use crate::inputs::expand_inputs;
+use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
 use crate::palette::ColorStage;
-use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
+use crate::voxelize::voxelize;
+use report::{Exported, stem, to_json};
+
+pub mod animation;
+pub mod palette;
+mod report;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
 /// through [`run`].
@@ -51,7 +57,7 @@ pub struct VoxelizeArgs {
     hollow: bool,
     /// The colour stage: --palette, --pastel, --colors, --dither.
     #[command(flatten)]
-    pub(crate) palette: crate::cli_palette::PaletteArgs,
+    pub(crate) palette: palette::PaletteArgs,
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
     method: Method,
@@ -67,7 +73,7 @@ pub struct VoxelizeArgs {
     #[arg(long)]
     json: bool,
     /// Largest accepted grid in cells (memory guard).
-    #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
+    #[arg(long, default_value_t = crate::options::DEFAULT_MAX_CELLS)]
     max_cells: u64,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
     /// --out is then one animated file when it ends in .glb or .gltf, else a folder of
@@ -96,7 +102,7 @@ impl VoxelizeArgs {
             shell: self.shell,
             hollow: self.hollow,
             method: self.method,
-            // The colour stage applies the remap (`crate::cli_palette`).
+            // The colour stage applies the remap (`palette`).
             pastel: false,
             max_cells: self.max_cells,
         }
@@ -132,50 +138,6 @@ struct Report<'a> {
     exported: Exported,
 }
 
-/// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
-#[derive(Debug, Default, serde::Serialize)]
-pub(crate) struct Exported {
-    /// The .vox written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    vox: Option<String>,
-    /// Its palette's colours: fewer than the model's `colors` when more than 255 were quantized (median cut).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    vox_colors: Option<usize>,
-    /// The .glb or .gltf written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gltf: Option<String>,
-    /// What the glTF holds (faces before merging, rectangles after, bytes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mesh: Option<MeshStats>,
-}
-
-impl Exported {
-    /// What writing `path` wrote.
-    pub(crate) fn new(path: &Path, written: Written) -> Self {
-        let path = Some(path.display().to_string());
-        match written {
-            Written::Vox(summary) => Self { vox: path, vox_colors: Some(summary.colors), ..Self::default() },
-            Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
-        }
-    }
-
-    /// The end of a readable line: `, wrote <path>` (with the mesh's figures for a glTF), or nothing.
-    pub(crate) fn summary(&self) -> String {
-        match (self.vox.as_ref().or(self.gltf.as_ref()), self.mesh) {
-            (Some(p), Some(m)) => {
-                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
-            }
-            (Some(p), None) => format!(", wrote {p}"),
-            (None, _) => String::new(),
-        }
-    }
-}
-
-/// The name of an input model: its file stem.
-pub(crate) fn stem(input: &Path) -> String {
-    input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
-}
-
 fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathBuf {
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
@@ -188,7 +150,7 @@ pub(crate) fn process(
     several: bool,
 ) -> Result<String> {
     if let Some(animation) = &args.animation {
-        let request = crate::cli_animation::ClipRequest {
+        let request = animation::ClipRequest {
             animation,
             fps: args.fps,
             duration: args.duration,
@@ -197,7 +159,7 @@ pub(crate) fn process(
             json: args.json,
             colors,
         };
-        return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
+        return animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
     }
     let t0 = Instant::now();
     let soup = crate::import::load_file(file)?;
@@ -238,7 +200,7 @@ pub(crate) fn process(
             write_ms,
             exported,
         };
-        serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
+        to_json(&report)
     } else {
         let [nx, ny, nz] = s.grid;
         let written = exported.summary();
@@ -259,11 +221,16 @@ pub(crate) fn process(
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     match VoxelizeArgs::try_parse_from(args) {
         Ok(args) => execute(&args),
-        Err(e) => {
-            let _ = e.print();
-            if e.use_stderr() { 2 } else { 0 }
-        }
+        Err(e) => report_parse_error(&e),
     }
+}
+
+/// Prints what parsing a command line gave instead of arguments (a usage error, or the `--help` or
+/// `--version` text) and returns the exit status for it: 2 for an error, else 0. The one place that maps
+/// parse errors to exit statuses: `voxel-art`'s own command line uses it too.
+pub fn report_parse_error(error: &clap::Error) -> i32 {
+    let _ = error.print();
+    if error.use_stderr() { 2 } else { 0 }
 }
 
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
