@@ -33,7 +33,7 @@ pub struct ClipRequest<'a> {
     pub format: Format,
     /// One JSON object per line instead of readable lines.
     pub json: bool,
-    /// The colour stage applied to every frame.
+    /// The colour stage applied to every frame (with the first frame's chosen colours).
     pub colors: &'a ColorStage,
 }
 
@@ -100,13 +100,15 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
     let bounds = model.clip_bounds(clip)?;
     let mut soup = TriangleSoup::default();
     let mut lines = Vec::with_capacity(frames);
+    // The colours chosen for the first frame serve every frame.
+    let mut frame_colors = request.colors.for_frames();
     for frame in 0..frames {
         let time = frame as f32 / request.fps;
         let t0 = Instant::now();
         model.pose_into(clip, time, &mut soup)?;
         let t1 = Instant::now();
         let mut voxels = voxelize_within(&soup, options, bounds)?;
-        request.colors.apply(&mut voxels)?;
+        frame_colors.apply(&mut voxels)?;
         let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
         let pose_ms = (t1 - t0).as_secs_f64() * 1e3;
         if let Some(animated) = &mut animated {

@@ -88,6 +88,12 @@ impl ColorStage {
     /// Recolours `model`'s voxels (sampled colours, e.g. voxelized without `pastel`) and recounts
     /// `stats.colors`. The alpha of each voxel is kept.
     pub fn apply(&self, model: &mut VoxelModel) -> Result<()> {
+        self.apply_keeping(model, &mut None)
+    }
+
+    /// [`ColorStage::apply`] to `model`, mapping to `*chosen` when it is set, else to the colours chosen for
+    /// `model` (the palette, its most used, or the model's own N), which it then keeps in `*chosen`.
+    fn apply_keeping(&self, model: &mut VoxelModel, chosen: &mut Option<Vec<[u8; 3]>>) -> Result<()> {
         if self.max_colors == Some(0) {
             return Err(VoxelError::Parameter("--colors must be at least 1".into()));
         }
@@ -97,13 +103,15 @@ impl ColorStage {
         if self.palette == Palette::Pastel {
             model.recolor(|v| pastel(v.color));
         }
-        let targets = match &self.palette {
-            Palette::Fixed { colors, .. } => Some(self.most_used(model, colors)),
-            Palette::Original | Palette::Pastel => {
-                self.max_colors.map(|n| reduce::representatives(&histogram(model), n))
-            }
-        };
-        if let Some(targets) = targets {
+        if chosen.is_none() {
+            *chosen = match &self.palette {
+                Palette::Fixed { colors, .. } => Some(self.most_used(model, colors)),
+                Palette::Original | Palette::Pastel => {
+                    self.max_colors.map(|n| reduce::representatives(&histogram(model), n))
+                }
+            };
+        }
+        if let Some(targets) = chosen.as_deref() {
             let labs: Vec<oklab::Lab> = targets.iter().map(|&c| oklab::from_srgb(c)).collect();
             let mut nearest: FxHashMap<[u8; 3], usize> = FxHashMap::default();
             model.recolor(|v| {
@@ -119,6 +127,12 @@ impl ColorStage {
         }
         model.stats.colors = model.visible_voxels().map(|v| v.color).collect::<FxHashSet<_>>().len();
         Ok(())
+    }
+
+    /// The stage for the frames of one animation: the colours chosen for the first frame (`--colors N`'s) are
+    /// kept for every later one, so a colour does not change from frame to frame.
+    pub fn for_frames(&self) -> FrameColors<'_> {
+        FrameColors { stage: self, chosen: None }
     }
 
     /// The colours of `palette` kept: all, or with `max_colors` N the N that the visible cells' colours are
@@ -137,6 +151,21 @@ impl ColorStage {
         ranked.truncate(n);
         ranked.sort_unstable();
         ranked.into_iter().map(|i| palette[i]).collect()
+    }
+}
+
+/// A [`ColorStage`] applied to the frames of one animation in turn ([`ColorStage::for_frames`]).
+#[derive(Debug)]
+pub struct FrameColors<'a> {
+    stage: &'a ColorStage,
+    /// The colours the first frame was mapped to, when the stage maps to chosen colours.
+    chosen: Option<Vec<[u8; 3]>>,
+}
+
+impl FrameColors<'_> {
+    /// Recolours the next frame as [`ColorStage::apply`] does, to the colours chosen for the first.
+    pub fn apply(&mut self, frame: &mut VoxelModel) -> Result<()> {
+        self.stage.apply_keeping(frame, &mut self.chosen)
     }
 }
 
@@ -226,6 +255,22 @@ mod tests {
         assert!(colors_of(&dithered).is_subset(&gameboy));
         let differing = plain.voxels().zip(dithered.voxels()).filter(|(a, b)| a.color != b.color).count();
         assert!(differing > 4, "some greys mix two greens: {differing}");
+    }
+
+    #[test]
+    fn the_frames_of_an_animation_keep_the_first_frames_colours() {
+        let stage = stage("original", Some(3), false);
+        let mut frames = stage.for_frames();
+        let mut first = ramp();
+        frames.apply(&mut first).unwrap();
+        // The next frame's greys are darker: alone it would choose other colours.
+        let mut darker = ramp();
+        darker.recolor(|v| v.color.map(|c| c / 2));
+        let mut alone = darker.clone();
+        stage.apply(&mut alone).unwrap();
+        frames.apply(&mut darker).unwrap();
+        assert!(colors_of(&darker).is_subset(&colors_of(&first)), "{:?} {:?}", colors_of(&darker), colors_of(&first));
+        assert_ne!(colors_of(&alone), colors_of(&first));
     }
 
     #[test]
