@@ -17,7 +17,7 @@ mod reduce;
 
 use std::path::Path;
 
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashMap;
 
 use crate::color::pastel;
 use crate::error::{Result, VoxelError};
@@ -86,7 +86,7 @@ impl ColorStage {
     }
 
     /// Recolours `model`'s voxels (sampled colours, e.g. voxelized without `pastel`) and recounts
-    /// `stats.colors`. The alpha of each voxel is kept.
+    /// `stats.colors` as the distinct RGB colours shown. The alpha of each voxel is kept.
     pub fn apply(&self, model: &mut VoxelModel) -> Result<()> {
         self.apply_keeping(model, &mut None)
     }
@@ -125,7 +125,8 @@ impl ColorStage {
                 [r, g, b, v.color[3]]
             });
         }
-        model.stats.colors = model.visible_voxels().map(|v| v.color).collect::<FxHashSet<_>>().len();
+        // The colours the exports show: RGB (a voxel keeps its alpha, which no export writes).
+        model.stats.colors = histogram(model).len();
         Ok(())
     }
 
@@ -182,6 +183,8 @@ fn histogram(model: &VoxelModel) -> Vec<([u8; 3], usize)> {
 
 #[cfg(test)]
 mod tests {
+    use rustc_hash::FxHashSet;
+
     use super::*;
     use crate::grid::{GridSize, GridSpec};
 
