@@ -31,8 +31,8 @@
 //! | leaf types | [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the input), [`grid`] (the grid and bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel), [`model`] (the output), [`glb`] |
 //! | passes | `columns` (column crossings and their roles), `orient` (closed parts and their facing; `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (with `cells`, `octree`), `visible`, `colour_pass` |
 //! | pipeline | [`voxelize`](mod@voxelize) |
-//! | beside it | [`import`] (glTF → soup; `scene` below `animation`), [`anim`] (posing), [`export`] (glTF mesh; `.vox` in [`vox`]), [`inputs`] (finding model files) |
-//! | command line | `cli` (`mod.rs` runs it; `animation` and `report` below it) |
+//! | beside it | [`import`] (glTF → soup; `scene` below `animation`), [`anim`] (posing), [`export`] (glTF mesh, one animated glTF; `.vox` in [`vox`]), [`inputs`] (finding model files), [`palette`] (the colour stage after sampling) |
+//! | command line | `cli` (`mod.rs` runs it; `animation`, `palette` and `report` below it) |
 //!
 //! A soup keeps one value derived from its positions, the winding fill's closed parts, in a slot whose type
 //! belongs to `orient` ([`soup`] holds it without knowing it), so the app's grid changes analyse a model once.
@@ -57,6 +57,7 @@ pub mod inputs;
 pub mod model;
 pub mod options;
 mod orient;
+pub mod palette;
 mod radix;
 pub mod shapes;
 mod shell;
