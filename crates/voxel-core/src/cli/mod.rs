@@ -150,6 +150,11 @@ pub(crate) fn process(
     several: bool,
 ) -> Result<String> {
     if let Some(animation) = &args.animation {
+        if several && args.out.as_deref().is_some_and(|out| Format::of_path(out) != Format::Vox) {
+            return Err(VoxelError::Parameter(
+                "one animated .glb/.gltf holds one model's clip: with several models, --out is a folder".into(),
+            ));
+        }
         let request = animation::ClipRequest {
             animation,
             fps: args.fps,

@@ -95,3 +95,15 @@ fn the_fox_running_as_one_glb_plays_each_frames_cells() {
     assert_frames_round_trip(&fox, &out, clip, &[0.0, 0.125, 0.25, 0.375], 32);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn several_models_cannot_share_one_animated_file() {
+    let dir = temp_model("a.glb", &morph_cube(None));
+    std::fs::write(dir.join("b.glb"), morph_cube(None)).unwrap();
+    let out = dir.join("both.glb");
+    let args = ["voxel-art voxelize", "a.glb", "b.glb", "--animation", "0", "--out", "both.glb"];
+    let args = args.map(|a| if a.ends_with(".glb") { dir.join(a).into_os_string() } else { a.into() });
+    assert_eq!(voxel_core::cli::run(args), 1);
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
