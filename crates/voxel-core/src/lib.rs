@@ -26,9 +26,11 @@
 //! Top to bottom, each module imports only from the layers below it or from earlier entries of its own layer
 //! (`tests/layers.rs` walks the imports and fails on any circle):
 //!
-//! * **Command line** (feature `cli`): `cli` (`mod.rs` parses and runs; its `animation` and `report` below it).
+//! * **Command line** (feature `cli`): `cli` (`mod.rs` parses and runs; its `animation`, `palette` and `report`
+//!   below it).
 //! * **Beside the pipeline**: [`anim`] (posing), [`import`] (glTF → soup: its `scene` below its `animation`),
-//!   [`vox`], [`export`] (the glTF mesh, and .vox through [`vox`]), [`files`] (finding model files).
+//!   [`vox`], [`palette`] (the colour stage after sampling; reads .vox palettes), [`export`] (the glTF mesh, one
+//!   animated glTF of a clip's frames, and .vox through [`vox`]), [`files`] (finding model files).
 //! * **Pipeline**: [`voxelize`](mod@voxelize).
 //! * **Passes**: `columns` (column crossings and how they count), `orient` (closed parts and their facing:
 //!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`.
@@ -59,6 +61,7 @@ pub mod import;
 pub mod model;
 pub mod options;
 mod orient;
+pub mod palette;
 mod radix;
 pub mod shapes;
 mod shell;

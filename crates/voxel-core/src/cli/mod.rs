@@ -12,10 +12,12 @@ use crate::export::{self, ExportOptions, Format};
 use crate::files::expand_inputs;
 use crate::grid::GridSize;
 use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
+use crate::palette::ColorStage;
 use crate::voxelize::voxelize;
 use report::{Exported, stem, to_json};
 
 pub mod animation;
+pub mod palette;
 mod report;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
@@ -53,9 +55,9 @@ pub struct VoxelizeArgs {
     /// Keep only voxels with an empty face neighbour.
     #[arg(long)]
     hollow: bool,
-    /// Apply the pastel colour remap.
-    #[arg(long)]
-    pastel: bool,
+    /// The colour stage: --palette, --pastel, --colors, --dither.
+    #[command(flatten)]
+    pub(crate) palette: palette::PaletteArgs,
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
     method: Method,
@@ -74,7 +76,8 @@ pub struct VoxelizeArgs {
     #[arg(long, default_value_t = crate::options::DEFAULT_MAX_CELLS)]
     max_cells: u64,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
-    /// --out is then a folder of <name>-<frame>.<format> files.
+    /// --out is then one animated file when it ends in .glb or .gltf, else a folder of
+    /// <name>-<frame>.<format> files.
     #[arg(long)]
     animation: Option<String>,
     /// Frames per second of --animation.
@@ -86,7 +89,7 @@ pub struct VoxelizeArgs {
 }
 
 impl VoxelizeArgs {
-    fn options(&self) -> VoxelizeOptions {
+    pub(crate) fn options(&self) -> VoxelizeOptions {
         VoxelizeOptions {
             model_size: self.model_size,
             grid: match (self.resolution, self.grid_size) {
@@ -99,7 +102,8 @@ impl VoxelizeArgs {
             shell: self.shell,
             hollow: self.hollow,
             method: self.method,
-            pastel: self.pastel,
+            // The colour stage applies the remap (`palette`).
+            pastel: false,
             max_cells: self.max_cells,
         }
     }
@@ -138,7 +142,13 @@ fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathB
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
-fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several: bool) -> Result<String> {
+pub(crate) fn process(
+    file: &Path,
+    args: &VoxelizeArgs,
+    options: &VoxelizeOptions,
+    colors: &ColorStage,
+    several: bool,
+) -> Result<String> {
     if let Some(animation) = &args.animation {
         let request = animation::ClipRequest {
             animation,
@@ -147,6 +157,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             out: args.out.as_deref(),
             format: args.format(true),
             json: args.json,
+            colors,
         };
         return animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
     }
@@ -154,7 +165,8 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
-    let model = voxelize(&soup, options)?;
+    let mut model = voxelize(&soup, options)?;
+    colors.apply(&mut model)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
     let exported = match &args.out {
@@ -227,6 +239,13 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     // Start the thread pool's workers now: they come up while the first file is read.
     rayon::spawn(|| ());
     let options = args.options();
+    let colors = match args.palette.stage() {
+        Ok(stage) => stage,
+        Err((what, e)) => {
+            eprintln!("error: {what}: {e}");
+            return 1;
+        }
+    };
     let files = expand_inputs(&args.files);
     if files.is_empty() {
         eprintln!("error: no .glb or .gltf files found in the given folders");
@@ -242,7 +261,8 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, several)));
+        let outcome =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {
@@ -281,7 +301,8 @@ mod tests {
             let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "4", "--json"];
             args.extend(extra);
             let args = VoxelizeArgs::try_parse_from(args).unwrap();
-            serde_json::from_str(&process(&input, &args, &args.options(), false).unwrap()).unwrap()
+            serde_json::from_str(&process(&input, &args, &args.options(), &ColorStage::default(), false).unwrap())
+                .unwrap()
         };
         let plain = report(&[]);
         assert_eq!(plain["voxels"], 4 * 2 * 2);
