@@ -9,8 +9,8 @@ use clap::Parser;
 
 use crate::error::{Result, VoxelError};
 use crate::export::{self, ExportOptions, Format};
+use crate::files::expand_inputs;
 use crate::grid::GridSize;
-use crate::inputs::expand_inputs;
 use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
 use crate::palette::ColorStage;
 use crate::voxelize::voxelize;

@@ -118,7 +118,7 @@ mod tests {
     }
 
     #[test]
-    fn a_palette_limits_the_exported_vox_and_glb_to_its_colours() {
+    fn a_palette_limits_the_exported_vox_and_glb_to_its_colors() {
         let dir = scratch("limits");
         let set = |colors: &[[u8; 3]]| colors.iter().copied().collect::<HashSet<_>>();
         let pico8 = crate::palette::Palette::from_arg("pico8").unwrap();
@@ -158,7 +158,7 @@ mod tests {
     }
 
     #[test]
-    fn colors_n_gives_at_most_n_colours_and_keeps_the_bright_one() {
+    fn colors_n_gives_at_most_n_colors_and_keeps_the_bright_one() {
         let dir = scratch("colors");
         let input = boxes(&dir);
         assert_eq!(report(&input, &[])["colors"], 8);

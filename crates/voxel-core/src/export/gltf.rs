@@ -394,7 +394,7 @@ mod tests {
     }
 
     #[test]
-    fn the_glb_passes_validation_with_exact_bounds_colours_and_the_inverse_normalization() {
+    fn the_glb_passes_validation_with_exact_bounds_colors_and_the_inverse_normalization() {
         let m = model_of(1, [([0, 0, 0], [255, 128, 0]), ([3, 1, 2], [0, 0, 0]), ([1, 0, 0], [255, 128, 0])]);
         let (bytes, stats) = to_glb(&m, &ExportOptions { name: "thing".into() }).unwrap();
         assert_eq!(stats, MeshStats { faces: 16, quads: 12, vertices: 48, bytes: bytes.len() });

@@ -43,7 +43,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_built_in_has_its_published_size_of_distinct_colours() {
+    fn every_built_in_has_its_published_size_of_distinct_colors() {
         for (name, size) in [("pico8", 16), ("gameboy", 4), ("sweetie16", 16), ("endesga32", 32), ("magicavoxel", 255)]
         {
             let colors = colors(name).unwrap();

@@ -61,7 +61,7 @@ mod tests {
     }
 
     #[test]
-    fn a_colour_a_quarter_of_the_way_takes_the_far_colour_in_a_quarter_of_the_cells() {
+    fn a_color_a_quarter_of_the_way_takes_the_far_color_in_a_quarter_of_the_cells() {
         let palette = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let c = [0.25, 0.0, 0.0];
         let cells = (0..4).flat_map(|x| (0..4).flat_map(move |y| (0..4).map(move |z| [x, y, z])));

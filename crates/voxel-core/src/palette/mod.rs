@@ -213,7 +213,7 @@ mod tests {
     }
 
     #[test]
-    fn a_fixed_palette_leaves_only_its_colours_and_counts_them() {
+    fn a_fixed_palette_leaves_only_its_colors_and_counts_them() {
         let mut model = ramp();
         stage("gameboy", None, false).apply(&mut model).unwrap();
         let gameboy: FxHashSet<[u8; 3]> = builtin::colors("gameboy").unwrap().into_iter().collect();
@@ -224,7 +224,7 @@ mod tests {
     }
 
     #[test]
-    fn colors_n_keeps_the_most_used_palette_colours_or_the_models_own() {
+    fn colors_n_keeps_the_most_used_palette_colors_or_the_models_own() {
         let mut model = ramp();
         stage("pico8", Some(3), false).apply(&mut model).unwrap();
         assert!(colors_of(&model).len() <= 3);
@@ -249,7 +249,7 @@ mod tests {
     }
 
     #[test]
-    fn dithering_mixes_the_two_nearest_colours_and_stays_in_the_palette() {
+    fn dithering_mixes_the_two_nearest_colors_and_stays_in_the_palette() {
         let mut plain = ramp();
         let mut dithered = ramp();
         stage("gameboy", None, false).apply(&mut plain).unwrap();
@@ -261,7 +261,7 @@ mod tests {
     }
 
     #[test]
-    fn the_frames_of_an_animation_keep_the_first_frames_colours() {
+    fn the_frames_of_an_animation_keep_the_first_frames_colors() {
         let stage = stage("original", Some(3), false);
         let mut frames = stage.for_frames();
         let mut first = ramp();
@@ -277,7 +277,7 @@ mod tests {
     }
 
     #[test]
-    fn unknown_names_and_zero_colours_are_errors() {
+    fn unknown_names_and_zero_colors_are_errors() {
         let err = Palette::from_arg("vga").unwrap_err().to_string();
         assert!(
             err.starts_with("not a usable palette: no palette named \"vga\" (built-in: original, pastel, pico8"),

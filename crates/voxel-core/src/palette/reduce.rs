@@ -69,13 +69,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn few_colours_are_all_kept() {
+    fn few_colors_are_all_kept() {
         let h = [([1, 2, 3], 4), ([9, 9, 9], 1)];
         assert_eq!(representatives(&h, 2), [[1, 2, 3], [9, 9, 9]]);
     }
 
     #[test]
-    fn a_small_bright_patch_keeps_its_colour_among_many_greens() {
+    fn a_small_bright_patch_keeps_its_color_among_many_greens() {
         // 400 greens (a gradient, 50 cells each) and 12 cells of a bright red.
         let mut h: Vec<([u8; 3], usize)> =
             (0..400).map(|i| ([20 + (i % 20) as u8, 100 + (i / 20) as u8 * 5, 30], 50)).collect();
