@@ -7,7 +7,7 @@
     view_transformations::position_world_to_clip,
 }
 #import bevy_render::color_operations::srgb_to_linear
-#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, world_position, world_normal}
+#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, point_to_world, normal_to_world}
 
 struct VoxelVertex {
     @builtin(instance_index) instance_index: u32,
@@ -27,11 +27,11 @@ struct VoxelVertexOutput {
 @vertex
 fn vertex(in: VoxelVertex) -> VoxelVertexOutput {
     let vertex = box_vertex(in.instance_index, in.vertex_index);
-    let world = world_position(vertex.voxel, flipped(vertex.flip, in.position));
+    let world = point_to_world(vertex.voxel, flipped(vertex.flip, in.position));
     var out: VoxelVertexOutput;
     out.world_position = vec4(world, 1.0);
     out.position = position_world_to_clip(world);
-    out.world_normal = world_normal(vertex.voxel, flipped(vertex.flip, in.normal));
+    out.world_normal = normal_to_world(vertex.voxel, flipped(vertex.flip, in.normal));
     out.color = vertex.voxel.color;
     out.instance_index = in.instance_index;
     return out;

@@ -78,7 +78,7 @@ fn flipped(flip: u32, p: vec3<f32>) -> vec3<f32> {
 }
 
 // A point of the unit box (−0.5..0.5) in world space.
-fn world_position(v: Voxel, p: vec3<f32>) -> vec3<f32> {
+fn point_to_world(v: Voxel, p: vec3<f32>) -> vec3<f32> {
     let c = turn_of(v);
     let x = vec3(v.x_axis.x, 0.0, v.x_axis.y);
     let z = vec3(-c.y, 0.0, c.x) * v.scale_z;
@@ -86,7 +86,7 @@ fn world_position(v: Voxel, p: vec3<f32>) -> vec3<f32> {
 }
 
 // A normal of the unit box in world space (the inverse transpose of turn × scale: turn × (n / scale)).
-fn world_normal(v: Voxel, n: vec3<f32>) -> vec3<f32> {
+fn normal_to_world(v: Voxel, n: vec3<f32>) -> vec3<f32> {
     let c = turn_of(v);
     let m = n / max(vec3(length(v.x_axis), v.scale_y, v.scale_z), vec3(1e-8));
     return normalize(vec3(c.x * m.x - c.y * m.z, m.y, c.y * m.x + c.x * m.z));

@@ -4,7 +4,7 @@
     prepass_io::VertexOutput,
     view_transformations::position_world_to_clip,
 }
-#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, world_position, world_normal}
+#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, point_to_world, normal_to_world}
 
 struct VoxelVertex {
     @builtin(instance_index) instance_index: u32,
@@ -18,7 +18,7 @@ struct VoxelVertex {
 @vertex
 fn vertex(in: VoxelVertex) -> VertexOutput {
     let vertex = box_vertex(in.instance_index, in.vertex_index);
-    let world = world_position(vertex.voxel, flipped(vertex.flip, in.position));
+    let world = point_to_world(vertex.voxel, flipped(vertex.flip, in.position));
     var out: VertexOutput;
     out.world_position = vec4(world, 1.0);
     out.position = position_world_to_clip(world);
@@ -27,7 +27,7 @@ fn vertex(in: VoxelVertex) -> VertexOutput {
     out.position.z = min(out.position.z, 1.0);
 #endif
 #ifdef NORMAL_PREPASS_OR_DEFERRED_PREPASS
-    out.world_normal = world_normal(vertex.voxel, flipped(vertex.flip, in.normal));
+    out.world_normal = normal_to_world(vertex.voxel, flipped(vertex.flip, in.normal));
 #endif
 #ifdef MOTION_VECTOR_PREPASS
     out.previous_world_position = out.world_position;

@@ -102,7 +102,7 @@ pub fn copies_of(voxel: &Mesh, copies: u32) -> Mesh {
     let vertices = positions.len() as u32;
     let copies_of = |values: &[[f32; 3]]| values.repeat(copies as usize);
     let all_indices = (0..copies).flat_map(|k| indices.iter().map(move |i| i + k * vertices)).collect();
-    Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::RENDER_WORLD)
+    Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
         .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, copies_of(&positions))
         .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, copies_of(&normals))
         .with_inserted_indices(Indices::U32(all_indices))
