@@ -156,7 +156,7 @@ fn interleaved(
     frames: usize,
     mut each: impl FnMut(&mut App, usize),
 ) -> (Vec<f64>, Vec<f64>, u64) {
-    let mut time = |app: &mut App| {
+    let time = |app: &mut App| {
         let t = Instant::now();
         app.update();
         t.elapsed().as_secs_f64() * 1e3
