@@ -104,7 +104,7 @@ fn a_fine_grid_renders_with_its_shadow() {
         "0.04".as_ref(),
     ];
     let Some(run) = run_app(&args) else { return };
-    assert_lit_model(&run, &out, 20_000);
+    assert_lit_model(&run, &out, 10_000);
 }
 
 /// The screenshot `out` of a successful `run`: at least `model_pixels` pixels of the model's colour, the
