@@ -17,6 +17,7 @@ use voxel_art::transition::ActiveTransition;
 use voxel_core::shapes::uv_sphere;
 use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
 
+#[path = "frame/render.rs"]
 mod render;
 
 /// About 100k voxels: a solid sphere 58 cells across.
