@@ -143,7 +143,7 @@ fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
 
 /// A decoded primitive with its morph-target position deltas and skin influences.
 fn read_primitive(
-    decoded: &super::DecodedPrimitive,
+    decoded: &super::DecodedPrimitive<'_>,
     prim: &gltf::Primitive<'_>,
     buffers: &Buffers,
 ) -> Result<Primitive> {
@@ -200,7 +200,7 @@ fn read_primitive(
     }
     Ok(Primitive {
         positions: decoded.positions.iter().map(|&p| Vec3::from(p)).collect(),
-        corners: decoded.triangles.iter().flatten().copied().collect(),
+        corners: decoded.corners.to_vec(),
         targets,
         influences,
     })
