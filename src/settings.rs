@@ -93,8 +93,6 @@ impl VoxelSettings {
             // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
             hollow: false,
             pastel: self.pastel,
-            // The app keeps voxel counts interactive: at most 4 M cells in a grid.
-            max_cells: 1 << 22,
             ..VoxelizeOptions::default()
         }
     }

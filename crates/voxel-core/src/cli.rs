@@ -65,9 +65,10 @@ pub struct VoxelizeArgs {
     /// Print one JSON object per line per file instead of a readable summary.
     #[arg(long)]
     json: bool,
-    /// Largest accepted grid in cells (memory guard).
-    #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
-    max_cells: u64,
+    /// The most memory a voxelization may take, in MB (default: what the system has available); a grid that
+    /// would need more is refused with the memory it needs.
+    #[arg(long, value_name = "MB")]
+    max_memory: Option<u64>,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
     /// --out is then a folder of <name>-<frame>.<format> files.
     #[arg(long)]
@@ -95,7 +96,7 @@ impl VoxelizeArgs {
             hollow: self.hollow,
             method: self.method,
             pastel: self.pastel,
-            max_cells: self.max_cells,
+            max_memory: self.max_memory.map(|mb| mb.saturating_mul(1_000_000)),
         }
     }
 

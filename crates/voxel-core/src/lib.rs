@@ -24,6 +24,7 @@ pub mod glb;
 pub mod grid;
 pub mod import;
 pub mod inputs;
+mod memory;
 pub mod model;
 mod orient;
 mod radix;
@@ -44,6 +45,6 @@ pub use grid::{BitGrid, GridSize, GridSpec};
 pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
 pub use voxelize::{
-    DEFAULT_MAX_CELLS, FillMode, Method, ShellMode, Voxel, VoxelModel, VoxelStats, VoxelizeOptions, voxelize,
+    FillMode, Method, ShellMode, Voxel, VoxelModel, VoxelStats, VoxelizeOptions, voxelize,
     voxelize_within,
 };

@@ -8,7 +8,8 @@ use crate::colour_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::GridTriangle;
-use crate::grid::{BitGrid, GridSize, GridSpec};
+use crate::grid::{BitGrid, GridSize, GridSpec, MAX_CELLS};
+use crate::memory;
 use crate::orient::analyse_parts_if_unbalanced;
 use crate::radix;
 use crate::shell::{Shell, shell};
@@ -79,12 +80,10 @@ pub struct VoxelizeOptions {
     pub method: Method,
     /// Apply the pastel remap to colours.
     pub pastel: bool,
-    /// Largest grid (nx·ny·nz) accepted; the default keeps memory under about 1 GiB.
-    pub max_cells: u64,
+    /// The most memory, in bytes, a voxelization may take (estimated before it starts: grids that need more
+    /// are refused with the memory they need); `None`: what the system has available.
+    pub max_memory: Option<u64>,
 }
-
-/// The default cell budget: 2²⁶ cells (e.g. 406³).
-pub const DEFAULT_MAX_CELLS: u64 = 1 << 26;
 
 impl Default for VoxelizeOptions {
     fn default() -> Self {
@@ -97,7 +96,7 @@ impl Default for VoxelizeOptions {
             hollow: false,
             method: Method::default(),
             pastel: false,
-            max_cells: DEFAULT_MAX_CELLS,
+            max_memory: None,
         }
     }
 }
@@ -230,9 +229,9 @@ fn prepare(
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
     }
-    let spec =
-        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let spec = GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, MAX_CELLS)?;
     let tris = spec.grid_triangles(soup);
+    memory::check(&spec, &tris, options.fill, memory::budget(options.max_memory))?;
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
     }

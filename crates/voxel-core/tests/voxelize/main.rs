@@ -8,8 +8,12 @@ mod compressed;
 mod corpus;
 mod errors;
 mod export;
+mod fine;
 mod gltf_export;
 mod meshopt;
 mod scale;
 mod shapes;
 mod winding;
+
+#[path = "../support/scenes.rs"]
+mod scenes;
