@@ -15,7 +15,8 @@ use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::geom::{GridTriangle, closest_point_barycentric, distance2, farther_than, point_at};
 use crate::grid::{AscendingCoords, GridSpec};
-use crate::shell::{Shell, ShellOctree};
+use crate::shell::Shell;
+use crate::shell::octree::ShellOctree;
 use crate::soup::TriangleSoup;
 
 /// The steps to the six face neighbours.

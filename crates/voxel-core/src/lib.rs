@@ -1,10 +1,41 @@
 //! voxel-core: fast, robust, coloured voxelization of glTF models — the library under voxel-art.
 //!
 //! ```text
-//! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox export, stats)
+//! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox / glTF export, stats)
 //! ```
 //! No rendering types here; deterministic whatever the thread count. The `voxel-art voxelize` command line
-//! (modules `cli` and `cli_animation`, with clap and indicatif) is behind the `cli` feature, off by default.
+//! (the `cli` module, with clap and indicatif) is behind the `cli` feature, off by default.
+//!
+//! A shape in, voxels out:
+//!
+//! ```
+//! use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, shapes::cuboid, voxelize};
+//!
+//! // A unit cube, orange (linear RGBA), in a grid of 8 cells along its longest side.
+//! let cube = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0, 0.5, 0.2, 1.0]);
+//! let model = voxelize(&cube, &VoxelizeOptions { grid: GridSize::Resolution(8), ..Default::default() })?;
+//! assert_eq!(model.stats.grid, [8, 8, 8]);
+//! assert_eq!(model.stats.voxels, 8 * 8 * 8);
+//! assert_eq!(model.stats.visible, 8 * 8 * 8 - 6 * 6 * 6); // the 6³ inside have no empty neighbour
+//! assert!(model.voxels().all(|v| v.color == [255, 188, 124, 255])); // sRGB
+//! # Ok::<(), voxel_core::VoxelError>(())
+//! ```
+//!
+//! # Layers
+//!
+//! Each module imports only from the layers below it or from its own row's earlier entries (no import circle:
+//! `tests/layers.rs` walks the imports and fails on one).
+//!
+//! | layer | modules |
+//! |---|---|
+//! | leaf types | [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the input), [`grid`] (the grid and bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel), [`model`] (the output), [`glb`] |
+//! | passes | `columns` (column crossings and their roles), `orient` (closed parts and their facing; `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (with `cells`, `octree`), `visible`, `colour_pass` |
+//! | pipeline | [`voxelize`](mod@voxelize) |
+//! | beside it | [`import`] (glTF → soup; `scene` below `animation`), [`anim`] (posing), [`export`] (glTF mesh; `.vox` in [`vox`]), [`inputs`] (finding model files) |
+//! | command line | `cli` (`mod.rs` runs it; `animation` and `report` below it) |
+//!
+//! A soup keeps one value derived from its positions, the winding fill's closed parts, in a slot whose type
+//! belongs to `orient` ([`soup`] holds it without knowing it), so the app's grid changes analyse a model once.
 
 #![warn(missing_docs)]
 
@@ -12,10 +43,9 @@ pub mod anim;
 pub mod bvh;
 #[cfg(feature = "cli")]
 pub mod cli;
-#[cfg(feature = "cli")]
-pub mod cli_animation;
 pub mod color;
 mod colour_pass;
+mod columns;
 pub mod error;
 pub mod export;
 mod fill;
@@ -26,6 +56,7 @@ pub mod import;
 pub mod inputs;
 mod memory;
 pub mod model;
+pub mod options;
 mod orient;
 mod radix;
 pub mod shapes;
@@ -43,8 +74,7 @@ pub use anim::{AnimatedModel, Bounds, ClipInfo};
 pub use error::{Result, VoxelError};
 pub use grid::{BitGrid, GridSize, GridSpec};
 pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
+pub use model::{Voxel, VoxelModel, VoxelStats};
+pub use options::{FillMode, Method, ShellMode, VoxelizeOptions};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
-pub use voxelize::{
-    FillMode, Method, ShellMode, Voxel, VoxelModel, VoxelStats, VoxelizeOptions, voxelize,
-    voxelize_within,
-};
+pub use voxelize::{voxelize, voxelize_within};

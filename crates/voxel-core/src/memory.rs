@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::error::{Result, VoxelError};
 use crate::geom::GridTriangle;
 use crate::grid::GridSpec;
-use crate::voxelize::FillMode;
+use crate::options::FillMode;
 
 /// Bytes per overlap of a triangle and a cell: the shell's packed pair (8) and its sorted cell and triangle
 /// (8), the fill's crossings, the visible cells with their colour and part (12 each, fewer than the

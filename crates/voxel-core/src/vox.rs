@@ -7,7 +7,7 @@ use dot_vox::{Color, DotVoxData, Frame, Model, SceneNode, ShapeModel, Size, Voxe
 use rustc_hash::FxHashMap;
 
 use crate::error::{Result, VoxelError};
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
 
 /// The largest model edge the format allows.
 pub const MAX_MODEL_EDGE: u32 = 256;

@@ -8,10 +8,35 @@ use std::path::Path;
 use gltf::json::{self, validation::Checked::Valid, validation::USize64};
 
 use super::mesh::{Surface, surface};
-use super::{ExportOptions, MeshStats};
 use crate::color::srgb_to_linear;
 use crate::error::{Result, VoxelError};
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
+
+/// What a glTF export is named inside the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExportOptions {
+    /// The name of the mesh and its node (e.g. the source model's file stem).
+    pub name: String,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        Self { name: "voxels".into() }
+    }
+}
+
+/// What a glTF export holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct MeshStats {
+    /// Cell faces between a filled and an empty cell: `2 × faces` triangles without merging.
+    pub faces: usize,
+    /// Rectangles after greedy merging: `2 × quads` triangles.
+    pub quads: usize,
+    /// Vertices (four per rectangle).
+    pub vertices: usize,
+    /// Bytes written (.gltf: the JSON and the .bin together).
+    pub bytes: usize,
+}
 
 /// The glTF document and its binary buffer (not yet given a URI or packed).
 struct Document {

@@ -6,7 +6,7 @@
 //! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
 //! rectangle of the row before when it spans the same columns in the same colour.
 
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
 
 /// One rectangle of the surface, all of one colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -137,12 +137,10 @@ impl MaterialCache {
         Ok(resolved)
     }
 
-    /// Decodes, on the thread pool, the base-colour images of the primitives of `meshes` (a failure is
-    /// reported when a material that uses the image is resolved, as without this).
-    pub fn prefetch<'a>(&mut self, meshes: impl Iterator<Item = gltf::Mesh<'a>>, buffers: &Buffers) {
-        let mut wanted: Vec<gltf::Image<'_>> = meshes
-            .flat_map(|mesh| mesh.primitives())
-            .filter(super::has_surface)
+    /// Decodes, on the thread pool, the base-colour images of `primitives` (a failure is reported when a
+    /// material that uses the image is resolved, as without this).
+    pub fn prefetch<'a>(&mut self, primitives: impl Iterator<Item = gltf::Primitive<'a>>, buffers: &Buffers) {
+        let mut wanted: Vec<gltf::Image<'_>> = primitives
             .filter_map(|prim| prim.material().pbr_metallic_roughness().base_color_texture())
             .map(|info| info.texture().source())
             .filter(|image| !self.images.contains_key(&image.index()))

@@ -7,6 +7,9 @@ use gltf::json::{Path as JsonPath, Root};
 
 use crate::error::{Result, VoxelError};
 
+/// The most triangles an import may produce (node instancing can multiply a small file).
+pub const MAX_TRIANGLES: usize = 20_000_000;
+
 /// Required extensions we decode (or that do not change geometry or base colour).
 const TOLERATED_REQUIRED: &[&str] = &[
     "KHR_draco_mesh_compression",

@@ -10,7 +10,7 @@ use voxel_core::{
 };
 
 #[cfg(feature = "cli")]
-use voxel_core::cli_animation::{ClipRequest, voxelize_clip};
+use voxel_core::cli::animation::{ClipRequest, voxelize_clip};
 #[cfg(feature = "cli")]
 use voxel_core::export::Format;
 

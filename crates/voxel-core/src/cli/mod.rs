@@ -8,10 +8,15 @@ use std::time::Instant;
 use clap::Parser;
 
 use crate::error::{Result, VoxelError};
-use crate::export::{self, ExportOptions, Format, MeshStats, Written};
+use crate::export::{self, ExportOptions, Format};
 use crate::grid::GridSize;
 use crate::inputs::expand_inputs;
-use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
+use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
+use crate::voxelize::voxelize;
+use report::{Exported, stem, to_json};
+
+pub mod animation;
+mod report;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
 /// through [`run`].
@@ -130,54 +135,13 @@ struct Report<'a> {
     exported: Exported,
 }
 
-/// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
-#[derive(Debug, Default, serde::Serialize)]
-pub(crate) struct Exported {
-    /// The .vox written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    vox: Option<String>,
-    /// The .glb or .gltf written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gltf: Option<String>,
-    /// What the glTF holds (faces before merging, rectangles after, bytes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mesh: Option<MeshStats>,
-}
-
-impl Exported {
-    /// What writing `path` wrote.
-    pub(crate) fn new(path: &Path, written: Written) -> Self {
-        let path = Some(path.display().to_string());
-        match written {
-            Written::Vox(_) => Self { vox: path, ..Self::default() },
-            Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
-        }
-    }
-
-    /// The end of a readable line: `, wrote <path>` (with the mesh's figures for a glTF), or nothing.
-    pub(crate) fn summary(&self) -> String {
-        match (self.vox.as_ref().or(self.gltf.as_ref()), self.mesh) {
-            (Some(p), Some(m)) => {
-                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
-            }
-            (Some(p), None) => format!(", wrote {p}"),
-            (None, _) => String::new(),
-        }
-    }
-}
-
-/// The name of an input model: its file stem.
-pub(crate) fn stem(input: &Path) -> String {
-    input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
-}
-
 fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathBuf {
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
 fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several: bool) -> Result<String> {
     if let Some(animation) = &args.animation {
-        let request = crate::cli_animation::ClipRequest {
+        let request = animation::ClipRequest {
             animation,
             fps: args.fps,
             duration: args.duration,
@@ -185,7 +149,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             format: args.format(true),
             json: args.json,
         };
-        return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
+        return animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
     }
     let t0 = Instant::now();
     let soup = crate::import::load_file(file)?;
@@ -225,7 +189,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             write_ms,
             exported,
         };
-        serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
+        to_json(&report)
     } else {
         let [nx, ny, nz] = s.grid;
         let written = exported.summary();
@@ -246,11 +210,16 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     match VoxelizeArgs::try_parse_from(args) {
         Ok(args) => execute(&args),
-        Err(e) => {
-            let _ = e.print();
-            if e.use_stderr() { 2 } else { 0 }
-        }
+        Err(e) => report_parse_error(&e),
     }
+}
+
+/// Prints what parsing a command line gave instead of arguments (a usage error, or the `--help` or
+/// `--version` text) and returns the exit status for it: 2 for an error, else 0. The one place that maps
+/// parse errors to exit statuses: `voxel-art`'s own command line uses it too.
+pub fn report_parse_error(error: &clap::Error) -> i32 {
+    let _ = error.print();
+    if error.use_stderr() { 2 } else { 0 }
 }
 
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1

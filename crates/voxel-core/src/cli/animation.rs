@@ -5,12 +5,13 @@
 use std::path::Path;
 use std::time::Instant;
 
+use super::report::{Exported, stem, to_json};
 use crate::anim::AnimatedModel;
-use crate::cli::{Exported, stem};
 use crate::error::{Result, VoxelError};
 use crate::export::{self, ExportOptions, Format};
+use crate::options::VoxelizeOptions;
 use crate::soup::TriangleSoup;
-use crate::voxelize::{VoxelizeOptions, voxelize_within};
+use crate::voxelize::voxelize_within;
 
 /// The most frames one command voxelizes (a guard against `--fps 1e9`).
 pub const MAX_FRAMES: usize = 100_000;
@@ -56,10 +57,6 @@ struct ClipReport<'a> {
     clip: &'a str,
     duration: f32,
     channels: usize,
-}
-
-fn to_json(value: &impl serde::Serialize) -> Result<String> {
-    serde_json::to_string(value).map_err(|e| VoxelError::Parameter(e.to_string()))
 }
 
 /// Runs the request on `file` and returns the lines to print: one per clip for `list`, else one per frame.
