@@ -29,7 +29,7 @@
 //! | layer | modules |
 //! |---|---|
 //! | leaf types | [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the input), [`grid`] (the grid and bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel), [`model`] (the output), [`glb`] |
-//! | passes | `columns` (column crossings and their roles), `orient` (closed parts and their facing; `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (with `cells`, `octree`), `visible`, `colour_pass` |
+//! | passes | `columns` (column crossings and their roles), `orient` (closed parts and their facing; `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (with `cells`, `octree`), `visible`, `colour_pass`, `memory` (the budget) |
 //! | pipeline | [`voxelize`](mod@voxelize) |
 //! | beside it | [`import`] (glTF → soup; `scene` below `animation`), [`anim`] (posing), [`export`] (glTF mesh; `.vox` in [`vox`]), [`inputs`] (finding model files) |
 //! | command line | `cli` (`mod.rs` runs it; `animation` and `report` below it) |
