@@ -144,7 +144,7 @@ def main():
             for mode in MODES:
                 ratios[mode].append(theirs_ms / ms[mode])
             read_ms = best(mine["equal"] + mine["full"], "read")
-            print(f"| {name} | {r} | {other[0]['triangles']} | {megabytes:.1f} | {read_ms:.1f} ({megabytes / read_ms * 1e3:.0f}) | "
+            print(f"| {name} | {r} | {other[0]['triangles']} | {megabytes:.2f} | {read_ms:.1f} ({megabytes / read_ms * 1e3:.0f}) | "
                   f"{mine['equal'][0]['voxels']} / {mine['full'][0]['voxels']} / {other[0]['voxels']} | "
                   f"{ms['equal']:.1f} | {ms['full']:.1f} | {theirs_ms:.1f} ({best(other, 'warm'):.1f}) | "
                   f"{theirs_ms / ms['equal']:.2f}× | {theirs_ms / ms['full']:.2f}× | {best(other, 'read'):.1f} |",

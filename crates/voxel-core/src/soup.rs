@@ -370,9 +370,10 @@ impl TriangleSoup {
             (lo, hi)
         };
         // Min and max of finite values do not depend on the order: chunks in parallel, then their bounds.
-        let chunks = self.vertices.par_chunks(1 << 16).map(|chunk| {
-            chunk.iter().fold((first, first), |bounds, v| grow(bounds, v.position))
-        });
+        let chunks = self
+            .vertices
+            .par_chunks(1 << 16)
+            .map(|chunk| chunk.iter().fold((first, first), |bounds, v| grow(bounds, v.position)));
         Some(chunks.reduce(|| (first, first), |a, b| grow(grow(a, b.0), b.1)))
     }
 }

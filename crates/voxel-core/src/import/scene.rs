@@ -292,7 +292,9 @@ impl<'a> SoupBuilder<'a> {
         name: &str,
     ) -> Result<Option<Cow<'a, [[f32; N]]>>> {
         match (draco, prim.get(semantic)) {
-            (None, Some(acc)) => accessor::read_plain_f32(&acc, self.buffers, &format!("{name} {}", semantic.to_string())),
+            (None, Some(acc)) => {
+                accessor::read_plain_f32(&acc, self.buffers, &format!("{name} {}", semantic.to_string()))
+            }
             _ => Ok(None),
         }
     }
