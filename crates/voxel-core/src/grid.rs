@@ -1,5 +1,5 @@
-//! The voxel grid: normalization of the model (the article's `modelSize` scaling), cell sizes, the cell
-//! budget, and a packed bit set over cells.
+//! The voxel grid: normalization of the model (the article's `modelSize` scaling), cell sizes, the largest
+//! cell count a grid may have (the voxelizer's budget is memory: `memory.rs`), and a packed bit set over cells.
 
 use glam::DVec3;
 

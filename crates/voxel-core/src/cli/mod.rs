@@ -272,6 +272,26 @@ mod tests {
     use crate::soup::TriangleSoup;
 
     #[test]
+    fn max_memory_is_in_megabytes_and_a_grid_over_it_is_refused_naming_the_memory_needed() {
+        let dir = std::env::temp_dir().join(format!("voxel-core-cli-memory-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let input = dir.join("block.glb");
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [2.0, 1.0, 1.0]), [1.0; 4]);
+        std::fs::write(&input, crate::glb::soup_to_glb(&soup).unwrap()).unwrap();
+        let args = |extra: &[&str]| {
+            let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "256"];
+            args.extend(extra);
+            VoxelizeArgs::try_parse_from(args).unwrap()
+        };
+        assert_eq!(args(&[]).options().max_memory, None);
+        let tight = args(&["--max-memory", "1"]);
+        assert_eq!(tight.options().max_memory, Some(1_000_000));
+        let err = process(&input, &tight, &tight.options(), false).unwrap_err().to_string();
+        assert!(err.contains("grid 256x128x128 needs about") && err.contains("more than the 1 MB available"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn the_json_line_times_the_write_only_when_there_is_one() {
         let dir = std::env::temp_dir().join(format!("voxel-core-cli-write-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
