@@ -1,7 +1,7 @@
 //! voxel-core: fast, robust, coloured voxelization of glTF models — the library under voxel-art.
 //!
 //! ```text
-//! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox / glTF export, stats)
+//! .glb/.gltf ──► import ──► TriangleSoup ──► voxelize ──► VoxelModel ──► (app, .vox and glTF export, stats)
 //! ```
 //! No rendering types here; deterministic whatever the thread count. The `voxel-art voxelize` command line
 //! (the `cli` module, with clap and indicatif) is behind the `cli` feature, off by default.
@@ -23,16 +23,20 @@
 //!
 //! # Layers
 //!
-//! Each module imports only from the layers below it or from its own row's earlier entries (no import circle:
-//! `tests/layers.rs` walks the imports and fails on one).
+//! Top to bottom, each module imports only from the layers below it or from earlier entries of its own layer
+//! (`tests/layers.rs` walks the imports and fails on any circle):
 //!
-//! | layer | modules |
-//! |---|---|
-//! | leaf types | [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the input), [`grid`] (the grid and bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel), [`model`] (the output), [`glb`] |
-//! | passes | `columns` (column crossings and their roles), `orient` (closed parts and their facing; `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (with `cells`, `octree`), `visible`, `colour_pass`, `memory` (the budget) |
-//! | pipeline | [`voxelize`](mod@voxelize) |
-//! | beside it | [`import`] (glTF → soup; `scene` below `animation`), [`anim`] (posing), [`export`] (glTF mesh; `.vox` in [`vox`]), [`inputs`] (finding model files) |
-//! | command line | `cli` (`mod.rs` runs it; `animation` and `report` below it) |
+//! * **Command line** (feature `cli`): `cli` (`mod.rs` parses and runs; its `animation`, `palette` and `report`
+//!   below it).
+//! * **Beside the pipeline**: [`anim`] (posing), [`import`] (glTF → soup: its `scene` below its `animation`),
+//!   [`vox`], [`palette`] (the colour stage after sampling; reads .vox palettes), [`export`] (the glTF mesh, one
+//!   animated glTF of a clip's frames, and .vox through [`vox`]), [`files`] (finding model files).
+//! * **Pipeline**: [`voxelize`](mod@voxelize).
+//! * **Passes**: `columns` (column crossings and how they count), `orient` (closed parts and their facing:
+//!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`, `memory` (the budget).
+//! * **Leaf types**: [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the
+//!   input), [`grid`] (the grid, the bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel),
+//!   [`model`] (the output), [`glb`].
 //!
 //! A soup keeps one value derived from its positions, the winding fill's closed parts, in a slot whose type
 //! belongs to `orient` ([`soup`] holds it without knowing it), so the app's grid changes analyse a model once.
@@ -44,20 +48,21 @@ pub mod bvh;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod color;
-mod colour_pass;
+mod color_pass;
 mod columns;
 pub mod error;
 pub mod export;
+pub mod files;
 mod fill;
 pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
-pub mod inputs;
 mod memory;
 pub mod model;
 pub mod options;
 mod orient;
+pub mod palette;
 mod radix;
 pub mod shapes;
 mod shell;

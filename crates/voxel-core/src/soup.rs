@@ -1,6 +1,8 @@
 //! A world-space triangle soup with everything colour sampling needs: the common input of the voxelizer.
 //!
-//! Both front doors produce it: the `gltf`-crate importer ([`crate::import`]) and the app's Bevy asset reader.
+//! The glTF importer ([`crate::import`]) and an animated model's poses ([`crate::anim`]) produce it; so can
+//! any code, from an indexed mesh ([`TriangleSoup::from_mesh`]) or triangle by triangle
+//! ([`TriangleSoup::push_triangle`]).
 
 use std::any::Any;
 use std::sync::{Arc, OnceLock};

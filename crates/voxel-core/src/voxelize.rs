@@ -4,7 +4,7 @@ use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::colour_pass::{pastel_all, surface_colors};
+use crate::color_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::GridTriangle;

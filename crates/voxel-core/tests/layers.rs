@@ -451,10 +451,12 @@ fn shortest_circle(graph: &Graph, node: &str, members: &BTreeSet<&str>) -> Strin
     way.join(" → ")
 }
 
+/// The folder of voxel-core's Cargo.toml.
 fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The fixture crate `tests/fixtures/layers/<name>`, read.
 fn fixture(name: &str) -> Crate {
     Crate::read(&manifest_dir().join("tests/fixtures/layers").join(name))
 }

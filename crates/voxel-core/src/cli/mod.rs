@@ -9,13 +9,15 @@ use clap::Parser;
 
 use crate::error::{Result, VoxelError};
 use crate::export::{self, ExportOptions, Format};
+use crate::files::expand_inputs;
 use crate::grid::GridSize;
-use crate::inputs::expand_inputs;
 use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
+use crate::palette::ColorStage;
 use crate::voxelize::voxelize;
 use report::{Exported, stem, to_json};
 
 pub mod animation;
+pub mod palette;
 mod report;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
@@ -53,9 +55,9 @@ pub struct VoxelizeArgs {
     /// Keep only voxels with an empty face neighbour.
     #[arg(long)]
     hollow: bool,
-    /// Apply the pastel colour remap.
-    #[arg(long)]
-    pastel: bool,
+    /// The colour stage: --palette, --pastel, --colors, --dither.
+    #[command(flatten)]
+    pub(crate) palette: palette::PaletteArgs,
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
     method: Method,
@@ -75,7 +77,8 @@ pub struct VoxelizeArgs {
     #[arg(long, value_name = "MB")]
     max_memory: Option<u64>,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
-    /// --out is then a folder of <name>-<frame>.<format> files.
+    /// --out is then one animated file when it ends in .glb or .gltf, else a folder of
+    /// <name>-<frame>.<format> files.
     #[arg(long)]
     animation: Option<String>,
     /// Frames per second of --animation.
@@ -87,7 +90,7 @@ pub struct VoxelizeArgs {
 }
 
 impl VoxelizeArgs {
-    fn options(&self) -> VoxelizeOptions {
+    pub(crate) fn options(&self) -> VoxelizeOptions {
         VoxelizeOptions {
             model_size: self.model_size,
             grid: match (self.resolution, self.grid_size) {
@@ -100,7 +103,8 @@ impl VoxelizeArgs {
             shell: self.shell,
             hollow: self.hollow,
             method: self.method,
-            pastel: self.pastel,
+            // The colour stage applies the remap (`palette`).
+            pastel: false,
             max_memory: self.max_memory.map(|mb| mb.saturating_mul(1_000_000)),
         }
     }
@@ -139,8 +143,19 @@ fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathB
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
-fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several: bool) -> Result<String> {
+pub(crate) fn process(
+    file: &Path,
+    args: &VoxelizeArgs,
+    options: &VoxelizeOptions,
+    colors: &ColorStage,
+    several: bool,
+) -> Result<String> {
     if let Some(animation) = &args.animation {
+        if several && args.out.as_deref().is_some_and(|out| Format::of_path(out) != Format::Vox) {
+            return Err(VoxelError::Parameter(
+                "one animated .glb/.gltf holds one model's clip: with several models, --out is a folder".into(),
+            ));
+        }
         let request = animation::ClipRequest {
             animation,
             fps: args.fps,
@@ -148,6 +163,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             out: args.out.as_deref(),
             format: args.format(true),
             json: args.json,
+            colors,
         };
         return animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
     }
@@ -155,7 +171,8 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
-    let model = voxelize(&soup, options)?;
+    let mut model = voxelize(&soup, options)?;
+    colors.apply(&mut model)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
     let exported = match &args.out {
@@ -228,6 +245,13 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     // Start the thread pool's workers now: they come up while the first file is read.
     rayon::spawn(|| ());
     let options = args.options();
+    let colors = match args.palette.stage() {
+        Ok(stage) => stage,
+        Err((what, e)) => {
+            eprintln!("error: {what}: {e}");
+            return 1;
+        }
+    };
     let files = expand_inputs(&args.files);
     if files.is_empty() {
         eprintln!("error: no .glb or .gltf files found in the given folders");
@@ -243,7 +267,8 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, several)));
+        let outcome =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {
@@ -286,7 +311,7 @@ mod tests {
         assert_eq!(args(&[]).options().max_memory, None);
         let tight = args(&["--max-memory", "1"]);
         assert_eq!(tight.options().max_memory, Some(1_000_000));
-        let err = process(&input, &tight, &tight.options(), false).unwrap_err().to_string();
+        let err = process(&input, &tight, &tight.options(), &ColorStage::default(), false).unwrap_err().to_string();
         assert!(err.contains("grid 256x128x128 needs about") && err.contains("more than the 1 MB available"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -302,7 +327,8 @@ mod tests {
             let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "4", "--json"];
             args.extend(extra);
             let args = VoxelizeArgs::try_parse_from(args).unwrap();
-            serde_json::from_str(&process(&input, &args, &args.options(), false).unwrap()).unwrap()
+            serde_json::from_str(&process(&input, &args, &args.options(), &ColorStage::default(), false).unwrap())
+                .unwrap()
         };
         let plain = report(&[]);
         assert_eq!(plain["voxels"], 4 * 2 * 2);

@@ -12,6 +12,9 @@ pub(crate) struct Exported {
     /// The .vox written.
     #[serde(skip_serializing_if = "Option::is_none")]
     vox: Option<String>,
+    /// Its palette's colours: fewer than the model's `colors` when more than 255 were quantized (median cut).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    vox_colors: Option<usize>,
     /// The .glb or .gltf written.
     #[serde(skip_serializing_if = "Option::is_none")]
     gltf: Option<String>,
@@ -25,7 +28,7 @@ impl Exported {
     pub(crate) fn new(path: &Path, written: Written) -> Self {
         let path = Some(path.display().to_string());
         match written {
-            Written::Vox(_) => Self { vox: path, ..Self::default() },
+            Written::Vox(summary) => Self { vox: path, vox_colors: Some(summary.colors), ..Self::default() },
             Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
         }
     }

@@ -4,6 +4,7 @@
 //! style) in normalized space and the normalization itself (`GridSpec::scale`, `GridSpec::center`), which
 //! the glTF node undoes.
 
+pub mod animated;
 pub mod gltf;
 pub mod mesh;
 

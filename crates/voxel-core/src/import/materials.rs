@@ -87,6 +87,9 @@ fn to_rgba8(data: &gltf::image::Data) -> Result<Vec<[u8; 4]>> {
 
 /// Decodes `image` (embedded, data URI or a file next to `base_dir`) to an RGBA8 texture.
 fn decode(image: &gltf::Image<'_>, base_dir: Option<&Path>, buffers: &Buffers) -> Result<Arc<Texture>> {
+    if let Some(webp) = super::webp::decode_if_webp(image, base_dir, buffers) {
+        return webp.map(Arc::new);
+    }
     let source = image.source();
     if let gltf::image::Source::View { view, .. } = &source {
         // The gltf crate slices the buffer unchecked (and never sees decoded meshopt views).

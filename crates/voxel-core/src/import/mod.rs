@@ -1,9 +1,9 @@
 //! glTF 2.0 import (through the `gltf` crate) into a world-space [`TriangleSoup`].
 //!
 //! Handles .glb, .gltf with external buffers and images, data URIs, the default scene's node hierarchy
-//! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression
-//! and EXT_meshopt_compression. Files that require an extension we cannot decode are refused with an error
-//! naming it; malformed files are refused with an error naming what is wrong (see the `validate` module).
+//! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression,
+//! EXT_meshopt_compression and EXT_texture_webp. Files that require an extension we cannot decode are refused with
+//! an error naming it; malformed files are refused with an error naming what is wrong (see the `validate` module).
 
 mod accessor;
 mod animation;
@@ -12,6 +12,7 @@ mod draco;
 mod materials;
 mod scene;
 mod validate;
+mod webp;
 
 use std::path::Path;
 

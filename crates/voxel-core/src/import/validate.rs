@@ -28,6 +28,7 @@ const TOLERATED_REQUIRED: &[&str] = &[
     "KHR_materials_anisotropy",
     "KHR_materials_dispersion",
     "KHR_lights_punctual",
+    super::webp::EXTENSION,
 ];
 
 /// How many validation problems an error message lists.
@@ -81,6 +82,7 @@ pub(super) fn check(document: gltf::Document) -> Result<gltf::Document> {
     }
     // The gltf crate does not list the extensions we decode ourselves as supported: validate without them.
     root.extensions_required.clear();
+    super::webp::use_webp_sources(&mut root)?;
     check_position_indices(&root)?;
     let mut problems = Vec::new();
     root.validate(&root, JsonPath::new, &mut |path: &dyn Fn() -> JsonPath, problem| {

@@ -205,9 +205,9 @@ mod tests {
     #[test]
     fn the_importers_source_vertices_weld_as_the_corners_do() {
         let Some(dir) = crate::test_models::models_dir() else { return };
-        let mut files = crate::inputs::expand_inputs(std::slice::from_ref(&dir));
+        let mut files = crate::files::expand_inputs(std::slice::from_ref(&dir));
         for sub in std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().is_dir()) {
-            files.extend(crate::inputs::expand_inputs(&[sub.path()]));
+            files.extend(crate::files::expand_inputs(&[sub.path()]));
         }
         assert!(files.len() >= 17, "{} corpus models", files.len());
         let mut with_sources = 0;

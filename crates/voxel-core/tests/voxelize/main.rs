@@ -1,6 +1,7 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod animated_export;
 mod animation;
 mod colors;
 mod common;
@@ -13,6 +14,7 @@ mod gltf_export;
 mod meshopt;
 mod scale;
 mod shapes;
+mod webp;
 mod winding;
 
 #[path = "../support/scenes.rs"]
