@@ -98,6 +98,6 @@ mod tests {
     fn slots_round_to_the_nearest_frame() {
         assert_eq!(FrameClock::slots_in(30, 4.0), 120);
         assert_eq!(FrameClock::slots_in(30, 0.01), 1);
-        assert_eq!(FrameClock::slots_in(30, 0.35), 11);
+        assert_eq!(FrameClock::slots_in(30, 0.36), 11);
     }
 }
