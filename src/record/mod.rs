@@ -33,7 +33,7 @@ use crate::model::ModelLibrary;
 use crate::schedule::AppSystems;
 
 pub use clock::FrameClock;
-pub use encoder::{GifFrame, GifSummary, GifWriter};
+pub use encoder::{FrameSender, GifFrame, GifSummary, GifWriter};
 
 /// Frames a second of a recording (GIF delays of 3, 3 and 4 centiseconds).
 pub const RECORD_FPS: u32 = 30;

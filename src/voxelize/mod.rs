@@ -40,10 +40,10 @@ pub struct VoxelizeJob {
 }
 
 /// What a job hands back: what it read (or was given) and its voxels, or why the file failed.
-type JobResult = Result<(Read, VoxelModel), String>;
+type JobResult = Result<(Imported, VoxelModel), String>;
 
 /// A file as the core's importer read it.
-struct Read {
+struct Imported {
     soup: Arc<TriangleSoup>,
     /// The animation, when the file has clips the core can play.
     animation: Option<AnimatedModel>,
@@ -60,24 +60,24 @@ enum JobInput {
 impl JobInput {
     /// Imports (if needed) and voxelizes.
     fn run(self, options: &voxel_core::VoxelizeOptions) -> JobResult {
-        let read = match self {
-            JobInput::Read(soup) => Read { soup, animation: None, animation_error: None },
+        let imported = match self {
+            JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None },
             JobInput::File(path) => read(&path)?,
         };
-        let model = voxel_core::voxelize(&read.soup, options).map_err(|e| e.to_string())?;
-        Ok((read, model))
+        let model = voxel_core::voxelize(&imported.soup, options).map_err(|e| e.to_string())?;
+        Ok((imported, model))
     }
 }
 
 /// Reads a file once: its soup, and its animation when it has clips. A file whose animation data the core
 /// refuses still shows, still (read again without its animations), with the reason kept for the model list.
-fn read(path: &std::path::Path) -> Result<Read, String> {
+fn read(path: &std::path::Path) -> Result<Imported, String> {
     let (soup, animation, animation_error) = match voxel_core::load_animated_file(path) {
         Ok(model) if model.clips().is_empty() => (model.into_rest_soup(), None, None),
         Ok(model) => (model.rest_soup().clone(), Some(model), None),
         Err(e) => (voxel_core::load_file(path).map_err(|e| e.to_string())?, None, Some(e.to_string())),
     };
-    Ok(Read { soup: Arc::new(soup), animation, animation_error })
+    Ok(Imported { soup: Arc::new(soup), animation, animation_error })
 }
 
 /// Starts a new generation when voxelization settings change.
@@ -156,12 +156,12 @@ fn finish_jobs(
     for (entity, mut job) in &mut jobs {
         let Some(mut result) = check_ready(&mut job.task) else { continue };
         commands.entity(entity).despawn();
-        if let (Ok((read, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
+        if let (Ok((imported, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
             && entry.soup.is_none()
         {
-            entry.soup = Some(read.soup.clone());
-            entry.animation = read.animation.take().map(Playback::new);
-            if let Some(reason) = read.animation_error.take() {
+            entry.soup = Some(imported.soup.clone());
+            entry.animation = imported.animation.take().map(Playback::new);
+            if let Some(reason) = imported.animation_error.take() {
                 warn!("{}: the animation is ignored: {reason}", entry.name);
                 entry.warning = Some(format!("the animation is ignored: {reason}"));
             }
