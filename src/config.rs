@@ -47,10 +47,7 @@ impl Cli {
     /// Parses `args` (the first is the program name); on `--help`, `--version` or a usage error prints it and
     /// returns the exit status to use (0, or 2 for an error).
     pub fn parse_args(args: Vec<std::ffi::OsString>) -> Result<Self, i32> {
-        Self::try_parse_from(args).map_err(|e| {
-            let _ = e.print();
-            if e.use_stderr() { 2 } else { 0 }
-        })
+        Self::try_parse_from(args).map_err(|e| voxel_core::cli::report_parse_error(&e))
     }
 }
 

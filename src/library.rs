@@ -58,14 +58,14 @@ impl ModelLibrary {
     /// neither becomes a failed entry, so the panel shows why.
     pub fn add_path(&mut self, path: &Path) -> Option<usize> {
         let files =
-            if path.is_dir() { voxel_core::inputs::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
+            if path.is_dir() { voxel_core::files::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
         let mut first = None;
         for file in files {
             let name =
                 file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
             let index = if !file.is_file() {
                 self.fail_entry(name, &file, format!("cannot read {}: no such file", file.display()))
-            } else if !voxel_core::inputs::is_model_file(&file) {
+            } else if !voxel_core::files::is_model_file(&file) {
                 self.fail_entry(name, &file, format!("{} is not a .glb or .gltf file", file.display()))
             } else {
                 let asset_path = file_asset_path(&file);
@@ -93,7 +93,7 @@ impl ModelLibrary {
 /// app (not a silent clamp).
 fn populate(mut library: ResMut<ModelLibrary>, setup: Res<LibrarySetup>, mut exit: MessageWriter<AppExit>) {
     let shipped = if setup.shipped { vec![asset_root().join("models")] } else { Vec::new() };
-    for file in voxel_core::inputs::expand_inputs(&shipped) {
+    for file in voxel_core::files::expand_inputs(&shipped) {
         if let Some(name) = file.file_name() {
             let stem = file.file_stem().unwrap_or(name).to_string_lossy().into_owned();
             let asset_path = format!("models/{}", name.to_string_lossy());

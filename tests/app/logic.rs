@@ -122,7 +122,7 @@ fn a_bad_file_becomes_an_error_entry_and_the_app_goes_on() {
 fn corpus_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
     let mut folders = vec![dir.to_owned()];
     folders.extend(std::fs::read_dir(dir).unwrap().flatten().map(|e| e.path()).filter(|p| p.is_dir()));
-    let mut files = voxel_core::inputs::expand_inputs(&folders);
+    let mut files = voxel_core::files::expand_inputs(&folders);
     files.sort();
     files
 }

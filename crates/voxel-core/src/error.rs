@@ -48,6 +48,9 @@ pub enum VoxelError {
     /// A parameter is out of its valid range.
     #[error("invalid parameter: {0}")]
     Parameter(String),
+    /// A palette file could not be used.
+    #[error("not a usable palette: {0}")]
+    Palette(String),
     /// Writing an export failed.
     #[error("cannot write {path}: {reason}")]
     Export {

@@ -116,7 +116,7 @@ mod tests {
     use crate::shapes::{cuboid, uv_sphere};
 
     #[test]
-    fn written_files_import_back_with_parts_materials_and_vertex_colours() {
+    fn written_files_import_back_with_parts_materials_and_vertex_colors() {
         let mut soup = TriangleSoup::default();
         soup.add_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0, 0.0, 0.0, 1.0], "box");
         let sphere = soup.add_mesh(&uv_sphere(0.5, 6), [0.0, 1.0, 0.0, 1.0], "ball");

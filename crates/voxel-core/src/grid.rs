@@ -280,27 +280,6 @@ impl BitGrid {
         self.words.iter().map(|w| w.count_ones() as usize).sum()
     }
 
-    /// Number of set cells in `range`.
-    pub fn count_range(&self, range: std::ops::Range<usize>) -> usize {
-        let mut i = range.start;
-        let mut total = 0;
-        while i < range.end {
-            let (w, b) = (i / 64, i % 64);
-            let n = (64 - b).min(range.end - i);
-            let mask = if n == 64 { u64::MAX } else { ((1u64 << n) - 1) << b };
-            total += (self.words[w] & mask).count_ones() as usize;
-            i += n;
-        }
-        total
-    }
-
-    /// Sets every cell set in `other`.
-    pub fn union_with(&mut self, other: &BitGrid) {
-        for (a, b) in self.words.iter_mut().zip(&other.words) {
-            *a |= *b;
-        }
-    }
-
     /// The `n` (≤ 64) cells from `start` as the low bits of a word (cell `start` in bit 0).
     #[inline]
     pub fn bits(&self, start: usize, n: usize) -> u64 {
@@ -437,8 +416,6 @@ mod tests {
         b.set(64);
         b.set_range(127..130);
         assert_eq!(b.count(), 5);
-        assert_eq!(b.count_range(1..128), 2);
-        assert_eq!(b.count_range(0..130), 5);
         assert_eq!(b.ones().collect::<Vec<_>>(), vec![0, 64, 127, 128, 129]);
     }
 

@@ -246,7 +246,7 @@ mod tests {
     }
 
     #[test]
-    fn interior_cells_take_the_colour_of_the_nearer_end_of_their_run() {
+    fn interior_cells_take_the_color_of_the_nearer_end_of_their_run() {
         let m = block();
         assert_eq!((m.len(), m.stats.visible), (54, 50));
         let all: Vec<Voxel> = m.voxels().collect();

@@ -12,9 +12,8 @@ use crate::grid::{BitGrid, GridSpec};
 use crate::radix::{self, Segments};
 
 mod cells;
-mod octree;
+pub(crate) mod octree;
 use cells::CellTester;
-pub(crate) use octree::ShellOctree;
 
 /// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
 #[derive(Debug, Default)]

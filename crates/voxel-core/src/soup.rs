@@ -1,12 +1,13 @@
 //! A world-space triangle soup with everything colour sampling needs: the common input of the voxelizer.
 //!
-//! Both front doors produce it: the `gltf`-crate importer ([`crate::import`]) and the app's Bevy asset reader.
+//! The glTF importer ([`crate::import`]) and an animated model's poses ([`crate::anim`]) produce it; so can
+//! any code, from an indexed mesh ([`TriangleSoup::from_mesh`]) or triangle by triangle
+//! ([`TriangleSoup::push_triangle`]).
 
-use std::cell::Cell;
+use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
 use crate::error::{Result, VoxelError};
-use crate::orient::SoupParts;
 
 /// How texture coordinates outside [0, 1] are mapped (glTF sampler wrap modes).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -130,7 +131,7 @@ impl Vertex {
 ///
 /// The corners are read with [`TriangleSoup::vertices`] and changed only through
 /// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`], so that what the soup keeps about its
-/// positions (the winding fill's closed parts, found once for every grid) never outlives them.
+/// positions (its `PositionCache`: the winding fill's closed parts, found once for every grid) never outlives them.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
     /// Materials referenced by parts.
@@ -141,8 +142,9 @@ pub struct TriangleSoup {
     vertices: Vec<Vertex>,
     /// The part of each triangle.
     pub triangle_parts: Vec<u32>,
-    /// The closed parts of `vertices`' positions, found when first needed; emptied whenever they can change.
-    closed_parts: OnceLock<Arc<SoupParts>>,
+    /// What a pass derived from `vertices`' positions alone, found when first needed; emptied whenever they can
+    /// change.
+    position_cache: PositionCache,
     /// The indexed vertices the corners were read from, while every corner still has one; dropped whenever
     /// the corners can change.
     sources: Option<SourceVertices>,
@@ -157,6 +159,37 @@ pub(crate) struct SourceVertices {
     pub positions: Vec<[f32; 3]>,
     /// Each corner's source vertex.
     pub index: Vec<u32>,
+}
+
+/// One value derived from a soup's positions alone, kept by the soup for every later voxelization: the
+/// winding fill's closed parts (`orient::soup_parts`), which the app's grid changes reuse. The soup only holds
+/// it (the module that finds it owns its type, so this leaf type knows nothing of the passes); a clone shares
+/// it, and the soup forgets it whenever its positions can change.
+#[derive(Clone, Default)]
+pub(crate) struct PositionCache(OnceLock<Arc<dyn Any + Send + Sync>>);
+
+impl PositionCache {
+    /// The value kept, if it is a `T`.
+    pub(crate) fn get<T: Any>(&self) -> Option<&T> {
+        self.0.get()?.downcast_ref()
+    }
+
+    /// The value kept, found with `find` if there is none yet. The cache holds one type, the part analysis: a
+    /// value of another type is a bug.
+    pub(crate) fn get_or_init<T: Any + Send + Sync>(&self, find: impl FnOnce() -> T) -> &T {
+        self.0.get_or_init(|| Arc::new(find())).downcast_ref().expect("the position cache holds one type")
+    }
+
+    /// Forgets the value.
+    fn clear(&mut self) {
+        self.0.take();
+    }
+}
+
+impl std::fmt::Debug for PositionCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.get().is_some() { "PositionCache(kept)" } else { "PositionCache(empty)" })
+    }
 }
 
 impl TriangleSoup {
@@ -180,7 +213,7 @@ impl TriangleSoup {
 
     /// Adds a triangle's corners, forgetting the analysis of the corners so far.
     fn push_corners(&mut self, part: u32, corners: [Vertex; 3]) {
-        self.closed_parts.take();
+        self.position_cache.clear();
         self.vertices.extend_from_slice(&corners);
         self.triangle_parts.push(part);
     }
@@ -193,33 +226,13 @@ impl TriangleSoup {
     /// The corners, to change (a new pose, an edited mesh): forgets what the soup knew about its positions.
     pub fn vertices_mut(&mut self) -> &mut [Vertex] {
         self.sources = None;
-        self.closed_parts.take();
+        self.position_cache.clear();
         &mut self.vertices
     }
 
-    /// The closed parts of the soup's positions (the winding fill's part analysis), found on the first call.
-    /// A voxelization may start it on one thread while another waits for it here, so the analysis must not wait
-    /// for the thread pool (it runs no rayon tasks): a thread blocked here then never holds work it needs.
-    pub(crate) fn closed_parts(&self) -> &SoupParts {
-        thread_local!(static ANALYSING: Cell<bool> = const { Cell::new(false) });
-        /// Clears the flag however the analysis ends (a panic included: the thread lives on in the pool).
-        struct Analysing;
-        impl Drop for Analysing {
-            fn drop(&mut self) {
-                ANALYSING.set(false);
-            }
-        }
-        debug_assert!(!ANALYSING.get(), "the part analysis waited for the thread pool and ran into itself");
-        self.closed_parts.get_or_init(|| {
-            ANALYSING.set(true);
-            let _analysing = Analysing;
-            Arc::new(SoupParts::of(self))
-        })
-    }
-
-    /// Whether the soup's closed parts have been found (and its positions not changed since).
-    pub(crate) fn has_closed_parts(&self) -> bool {
-        self.closed_parts.get().is_some()
+    /// What a pass derived from the soup's positions alone and keeps for the next voxelization.
+    pub(crate) fn position_cache(&self) -> &PositionCache {
+        &self.position_cache
     }
 
     /// Adds indexed source vertices at `positions` for the triangles pushed with [`Self::push_indexed_triangle`],

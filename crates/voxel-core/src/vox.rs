@@ -7,7 +7,7 @@ use dot_vox::{Color, DotVoxData, Frame, Model, SceneNode, ShapeModel, Size, Voxe
 use rustc_hash::FxHashMap;
 
 use crate::error::{Result, VoxelError};
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
 
 /// The largest model edge the format allows.
 pub const MAX_MODEL_EDGE: u32 = 256;
@@ -191,7 +191,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn few_colours_are_kept_exactly() {
+    fn few_colors_are_kept_exactly() {
         let h = [([1, 2, 3], 5), ([200, 0, 0], 1)];
         let (palette, index) = quantize(&h, 255);
         assert_eq!(palette.len(), 2);
@@ -199,7 +199,7 @@ mod tests {
     }
 
     #[test]
-    fn many_colours_are_cut_to_the_limit_and_stay_close() {
+    fn many_colors_are_cut_to_the_limit_and_stay_close() {
         let mut h: Vec<([u8; 3], usize)> =
             (0..4096u32).map(|i| ([(i % 16 * 16) as u8, (i / 16 % 16 * 16) as u8, (i / 256 * 16) as u8], 1)).collect();
         h.sort_unstable();

@@ -1,7 +1,7 @@
 //! The consistency checks of [`super::AnimatedModel::new`]: every index in range, every length matching, so
 //! that posing never indexes out of bounds.
 
-use super::{Clip, Instance, Node, Primitive, Skin, Target};
+use super::scene::{Clip, Instance, Node, Primitive, Skin, Target};
 use crate::error::{Result, VoxelError};
 
 fn invalid(message: String) -> Result<()> {

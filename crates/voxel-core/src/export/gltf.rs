@@ -8,10 +8,36 @@ use std::path::Path;
 use gltf::json::{self, validation::Checked::Valid, validation::USize64};
 
 use super::mesh::{Surface, surface};
-use super::{ExportOptions, MeshStats};
 use crate::color::srgb_to_linear;
 use crate::error::{Result, VoxelError};
-use crate::voxelize::VoxelModel;
+use crate::grid::GridSpec;
+use crate::model::VoxelModel;
+
+/// What a glTF export is named inside the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExportOptions {
+    /// The name of the mesh and its node (e.g. the source model's file stem).
+    pub name: String,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        Self { name: "voxels".into() }
+    }
+}
+
+/// What a glTF export holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct MeshStats {
+    /// Cell faces between a filled and an empty cell: `2 × faces` triangles without merging.
+    pub faces: usize,
+    /// Rectangles after greedy merging: `2 × quads` triangles.
+    pub quads: usize,
+    /// Vertices (four per rectangle).
+    pub vertices: usize,
+    /// Bytes written (.gltf: the JSON and the .bin together).
+    pub bytes: usize,
+}
 
 /// The glTF document and its binary buffer (not yet given a URI or packed).
 struct Document {
@@ -55,23 +81,35 @@ impl Vertices {
     }
 }
 
-/// Accumulates the binary buffer, its views and accessors.
-struct Builder {
-    root: json::Root,
-    bin: Vec<u8>,
+/// Accumulates a glTF document: its binary buffer, views, accessors, meshes and their shared material.
+pub(super) struct Builder {
+    pub root: json::Root,
+    pub bin: Vec<u8>,
+    /// The plain material every mesh uses, once the first mesh is added.
+    material: Option<json::Index<json::Material>>,
 }
 
 impl Builder {
+    /// An empty document naming voxel-art as its generator.
+    pub fn new() -> Self {
+        let asset = json::Asset {
+            generator: Some(format!("voxel-art {}", env!("CARGO_PKG_VERSION"))),
+            version: "2.0".into(),
+            ..Default::default()
+        };
+        Self { root: json::Root { asset, ..Default::default() }, bin: Vec::new(), material: None }
+    }
+
     /// Makes the bytes appended to the buffer since `offset` a buffer view (padded to 4 bytes) and an
-    /// accessor over it.
+    /// accessor over it, with `bounds` as its min and max.
     fn accessor(
         &mut self,
         offset: usize,
         count: usize,
         component: json::accessor::ComponentType,
         kind: json::accessor::Type,
-        target: json::buffer::Target,
-        bounds: Option<([f32; 3], [f32; 3])>,
+        target: Option<json::buffer::Target>,
+        bounds: Option<(json::Value, json::Value)>,
     ) -> json::Index<json::Accessor> {
         let length = self.bin.len() - offset;
         self.bin.resize(self.bin.len().next_multiple_of(4), 0);
@@ -83,8 +121,9 @@ impl Builder {
             extensions: None,
             extras: Default::default(),
             name: None,
-            target: Some(Valid(target)),
+            target: target.map(Valid),
         });
+        let (min, max) = bounds.unzip();
         self.root.push(json::Accessor {
             buffer_view: Some(view),
             byte_offset: None,
@@ -93,29 +132,56 @@ impl Builder {
             extensions: None,
             extras: Default::default(),
             type_: Valid(kind),
-            min: bounds.map(|(lo, _)| json::Value::from(lo.to_vec())),
-            max: bounds.map(|(_, hi)| json::Value::from(hi.to_vec())),
+            min,
+            max,
             name: None,
             normalized: false,
             sparse: None,
         })
     }
 
-    /// Appends VEC3 floats.
-    fn vec3s(&mut self, values: &[[f32; 3]], bounds: bool) -> json::Index<json::Accessor> {
+    /// Appends VEC3 floats (vertex attributes when `target`, else animation data), with their bounds if
+    /// asked.
+    pub fn vec3s(&mut self, values: &[[f32; 3]], bounds: bool, target: bool) -> json::Index<json::Accessor> {
         let offset = self.bin.len();
         self.bin.reserve(values.len() * 12);
         for v in values.iter().flatten() {
             self.bin.extend_from_slice(&v.to_le_bytes());
         }
         let bounds = bounds.then(|| {
-            values.iter().fold(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]), |(lo, hi), p| {
+            let (lo, hi) = values.iter().fold(([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]), |(lo, hi), p| {
                 (std::array::from_fn(|a| lo[a].min(p[a])), std::array::from_fn(|a| hi[a].max(p[a])))
-            })
+            });
+            (json::Value::from(lo.to_vec()), json::Value::from(hi.to_vec()))
         });
-        let (f32_, vec3, array) =
-            (json::accessor::ComponentType::F32, json::accessor::Type::Vec3, json::buffer::Target::ArrayBuffer);
-        self.accessor(offset, values.len(), f32_, vec3, array, bounds)
+        let target = target.then_some(json::buffer::Target::ArrayBuffer);
+        self.accessor(
+            offset,
+            values.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Vec3,
+            target,
+            bounds,
+        )
+    }
+
+    /// Appends scalar floats (animation times: with their min and max, as glTF requires of sampler inputs).
+    pub fn scalars(&mut self, values: &[f32]) -> json::Index<json::Accessor> {
+        let offset = self.bin.len();
+        for v in values {
+            self.bin.extend_from_slice(&v.to_le_bytes());
+        }
+        let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let bounds = Some((json::Value::from(vec![lo]), json::Value::from(vec![hi])));
+        self.accessor(
+            offset,
+            values.len(),
+            json::accessor::ComponentType::F32,
+            json::accessor::Type::Scalar,
+            None,
+            bounds,
+        )
     }
 
     /// Appends triangle indices, as u16 when every index fits below u16's maximum (which glTF reserves).
@@ -132,33 +198,15 @@ impl Builder {
         }
         let component = if narrow { json::accessor::ComponentType::U16 } else { json::accessor::ComponentType::U32 };
         let (scalar, element) = (json::accessor::Type::Scalar, json::buffer::Target::ElementArrayBuffer);
-        self.accessor(offset, indices.len(), component, scalar, element, None)
+        self.accessor(offset, indices.len(), component, scalar, Some(element), None)
     }
-}
 
-/// The glTF document of `model`'s surface.
-fn document(model: &VoxelModel, options: &ExportOptions) -> Document {
-    let surface = surface(model);
-    let vertices = Vertices::of(model, &surface);
-    let mut b = Builder {
-        root: json::Root {
-            asset: json::Asset {
-                generator: Some(format!("voxel-art {}", env!("CARGO_PKG_VERSION"))),
-                version: "2.0".into(),
-                ..Default::default()
-            },
-            ..Default::default()
-        },
-        bin: Vec::new(),
-    };
-    let mesh = (!surface.quads.is_empty()).then(|| {
-        let attributes = BTreeMap::from([
-            (Valid(json::mesh::Semantic::Positions), b.vec3s(&vertices.positions, true)),
-            (Valid(json::mesh::Semantic::Normals), b.vec3s(&vertices.normals, false)),
-            (Valid(json::mesh::Semantic::Colors(0)), b.vec3s(&vertices.colors, false)),
-        ]);
-        let indices = b.indices(&vertices.indices, vertices.positions.len());
-        let material = b.root.push(json::Material {
+    /// The plain material of every mesh, added on first use.
+    fn material(&mut self) -> json::Index<json::Material> {
+        if let Some(material) = self.material {
+            return material;
+        }
+        let material = self.root.push(json::Material {
             name: Some("voxel".into()),
             pbr_metallic_roughness: json::material::PbrMetallicRoughness {
                 base_color_factor: json::material::PbrBaseColorFactor([1.0; 4]),
@@ -168,60 +216,117 @@ fn document(model: &VoxelModel, options: &ExportOptions) -> Document {
             },
             ..Default::default()
         });
-        b.root.push(json::Mesh {
-            extensions: None,
-            extras: Default::default(),
-            name: Some(options.name.clone()),
-            primitives: vec![json::mesh::Primitive {
-                attributes,
+        self.material = Some(material);
+        material
+    }
+
+    /// Adds the mesh of `model`'s surface (greedy rectangles) named `name`, or nothing when it has no face;
+    /// with what it holds (`bytes` 0).
+    pub fn mesh(&mut self, model: &VoxelModel, name: &str) -> (Option<json::Index<json::Mesh>>, MeshStats) {
+        let surface = surface(model);
+        let vertices = Vertices::of(model, &surface);
+        let mesh = (!surface.quads.is_empty()).then(|| {
+            let attributes = BTreeMap::from([
+                (Valid(json::mesh::Semantic::Positions), self.vec3s(&vertices.positions, true, true)),
+                (Valid(json::mesh::Semantic::Normals), self.vec3s(&vertices.normals, false, true)),
+                (Valid(json::mesh::Semantic::Colors(0)), self.vec3s(&vertices.colors, false, true)),
+            ]);
+            let indices = self.indices(&vertices.indices, vertices.positions.len());
+            let material = self.material();
+            self.root.push(json::Mesh {
                 extensions: None,
                 extras: Default::default(),
-                indices: Some(indices),
-                material: Some(material),
-                mode: Valid(json::mesh::Mode::Triangles),
-                targets: None,
-            }],
-            weights: None,
-        })
-    });
-    if !b.bin.is_empty() {
-        b.root.push(json::Buffer {
-            byte_length: USize64::from(b.bin.len()),
-            extensions: None,
-            extras: Default::default(),
-            name: None,
-            uri: None,
+                name: Some(name.into()),
+                primitives: vec![json::mesh::Primitive {
+                    attributes,
+                    extensions: None,
+                    extras: Default::default(),
+                    indices: Some(indices),
+                    material: Some(material),
+                    mode: Valid(json::mesh::Mode::Triangles),
+                    targets: None,
+                }],
+                weights: None,
+            })
         });
+        let stats = MeshStats {
+            faces: surface.faces,
+            quads: surface.quads.len(),
+            vertices: vertices.positions.len(),
+            bytes: 0,
+        };
+        (mesh, stats)
     }
-    // Normalized space is (world − centre) · scale: the node maps it back to the original's world space.
-    let spec = &model.spec;
-    let node = b.root.push(json::Node {
-        name: Some(options.name.clone()),
-        mesh,
-        translation: Some(spec.center),
-        scale: Some([1.0 / spec.scale; 3]),
-        ..Default::default()
-    });
-    let scene =
-        b.root.push(json::Scene { extensions: None, extras: Default::default(), name: None, nodes: vec![node] });
-    b.root.scene = Some(scene);
-    let stats =
-        MeshStats { faces: surface.faces, quads: surface.quads.len(), vertices: vertices.positions.len(), bytes: 0 };
-    Document { root: b.root, bin: b.bin, stats }
+
+    /// The node that maps the normalized space of `spec`'s grid back to the original's world space ((world −
+    /// centre) · scale is normalized), with `mesh` or `children`.
+    pub fn placed_node(
+        &mut self,
+        spec: &GridSpec,
+        name: &str,
+        mesh: Option<json::Index<json::Mesh>>,
+        children: Option<Vec<json::Index<json::Node>>>,
+    ) -> json::Index<json::Node> {
+        self.root.push(json::Node {
+            name: Some(name.into()),
+            mesh,
+            children,
+            translation: Some(spec.center),
+            scale: Some([1.0 / spec.scale; 3]),
+            ..Default::default()
+        })
+    }
+
+    /// Declares the buffer (when anything was written to it) and the one scene of `node`.
+    pub fn finish(mut self, node: json::Index<json::Node>) -> (json::Root, Vec<u8>) {
+        if !self.bin.is_empty() {
+            self.root.push(json::Buffer {
+                byte_length: USize64::from(self.bin.len()),
+                extensions: None,
+                extras: Default::default(),
+                name: None,
+                uri: None,
+            });
+        }
+        let scene =
+            self.root.push(json::Scene { extensions: None, extras: Default::default(), name: None, nodes: vec![node] });
+        self.root.scene = Some(scene);
+        (self.root, self.bin)
+    }
+}
+
+/// The glTF document of `model`'s surface.
+fn document(model: &VoxelModel, options: &ExportOptions) -> Document {
+    let mut b = Builder::new();
+    let (mesh, stats) = b.mesh(model, &options.name);
+    let node = b.placed_node(&model.spec, &options.name, mesh, None);
+    let (root, bin) = b.finish(node);
+    Document { root, bin, stats }
 }
 
 /// Encodes `model` as a binary glTF (.glb) in memory, with what it holds.
 pub fn to_glb(model: &VoxelModel, options: &ExportOptions) -> Result<(Vec<u8>, MeshStats)> {
-    let Document { root, bin, mut stats } = document(model, options);
+    let Document { root, bin, stats } = document(model, options);
+    pack(&root, &bin, stats)
+}
+
+/// A document and its buffer packed as .glb bytes, with `stats.bytes` set.
+fn pack(root: &json::Root, bin: &[u8], mut stats: MeshStats) -> Result<(Vec<u8>, MeshStats)> {
     let json = root.to_vec().map_err(crate::glb::encode_error)?;
-    let bytes = crate::glb::pack(&json, &bin)?;
+    let bytes = crate::glb::pack(&json, bin)?;
     stats.bytes = bytes.len();
     Ok((bytes, stats))
 }
 
 /// Writes `model` as a binary glTF file.
 pub fn write_glb(model: &VoxelModel, path: &Path, options: &ExportOptions) -> Result<MeshStats> {
-    let (bytes, stats) = to_glb(model, options)?;
+    let Document { root, bin, stats } = document(model, options);
+    write_glb_document(&root, &bin, stats, path)
+}
+
+/// Writes a document and its buffer as a .glb file; `bytes` in the result is the file's size.
+pub(super) fn write_glb_document(root: &json::Root, bin: &[u8], stats: MeshStats, path: &Path) -> Result<MeshStats> {
+    let (bytes, stats) = pack(root, bin, stats)?;
     std::fs::write(path, bytes).map_err(|e| VoxelError::Export { path: path.to_owned(), reason: e.to_string() })?;
     Ok(stats)
 }
@@ -229,7 +334,17 @@ pub fn write_glb(model: &VoxelModel, path: &Path, options: &ExportOptions) -> Re
 /// Writes `model` as a .gltf JSON file and, beside it, a .bin of the same stem that the JSON refers to.
 /// `bytes` in the result counts both files.
 pub fn write_gltf(model: &VoxelModel, path: &Path, options: &ExportOptions) -> Result<MeshStats> {
-    let Document { mut root, bin, mut stats } = document(model, options);
+    let Document { root, bin, stats } = document(model, options);
+    write_document(root, bin, stats, path)
+}
+
+/// Writes a document as a .gltf file and its buffer as a .bin beside it; `bytes` in the result counts both.
+pub(super) fn write_document(
+    mut root: json::Root,
+    bin: Vec<u8>,
+    mut stats: MeshStats,
+    path: &Path,
+) -> Result<MeshStats> {
     let bin_path = path.with_extension("bin");
     let export_error = |path: &Path, reason: String| VoxelError::Export { path: path.to_owned(), reason };
     if let Some(buffer) = root.buffers.first_mut() {
@@ -279,7 +394,7 @@ mod tests {
     }
 
     #[test]
-    fn the_glb_passes_validation_with_exact_bounds_colours_and_the_inverse_normalization() {
+    fn the_glb_passes_validation_with_exact_bounds_colors_and_the_inverse_normalization() {
         let m = model_of(1, [([0, 0, 0], [255, 128, 0]), ([3, 1, 2], [0, 0, 0]), ([1, 0, 0], [255, 128, 0])]);
         let (bytes, stats) = to_glb(&m, &ExportOptions { name: "thing".into() }).unwrap();
         assert_eq!(stats, MeshStats { faces: 16, quads: 12, vertices: 48, bytes: bytes.len() });

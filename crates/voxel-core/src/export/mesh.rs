@@ -6,7 +6,7 @@
 //! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
 //! rectangle of the row before when it spans the same columns in the same colour.
 
-use crate::voxelize::VoxelModel;
+use crate::model::VoxelModel;
 
 /// One rectangle of the surface, all of one colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -282,7 +282,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn faces_merge_only_within_one_colour() {
+    fn faces_merge_only_within_one_color() {
         let two = [([0, 0, 0], [255, 0, 0]), ([1, 0, 0], [0, 0, 255])];
         let s = checked_surface(&model_of(1, two));
         assert_eq!((s.faces, s.quads.len()), (10, 10));
@@ -292,7 +292,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn a_voxelized_sphere_with_two_colours_is_covered_exactly() {
+    fn a_voxelized_sphere_with_two_colors_is_covered_exactly() {
         let mut soup = crate::TriangleSoup::default();
         soup.add_mesh(&crate::shapes::uv_sphere(1.0, 24), [1.0, 0.5, 0.0, 1.0], "ball");
         let mut m = crate::voxelize(

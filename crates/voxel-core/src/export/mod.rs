@@ -4,40 +4,17 @@
 //! style) in normalized space and the normalization itself (`GridSpec::scale`, `GridSpec::center`), which
 //! the glTF node undoes.
 
+pub mod animated;
 pub mod gltf;
 pub mod mesh;
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Result, VoxelError};
+use crate::model::VoxelModel;
 use crate::vox::{VoxSummary, write_vox};
-use crate::voxelize::VoxelModel;
 
-/// What a glTF export is named inside the file.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ExportOptions {
-    /// The name of the mesh and its node (e.g. the source model's file stem).
-    pub name: String,
-}
-
-impl Default for ExportOptions {
-    fn default() -> Self {
-        Self { name: "voxels".into() }
-    }
-}
-
-/// What a glTF export holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct MeshStats {
-    /// Cell faces between a filled and an empty cell: `2 × faces` triangles without merging.
-    pub faces: usize,
-    /// Rectangles after greedy merging: `2 × quads` triangles.
-    pub quads: usize,
-    /// Vertices (four per rectangle).
-    pub vertices: usize,
-    /// Bytes written (.gltf: the JSON and the .bin together).
-    pub bytes: usize,
-}
+pub use gltf::{ExportOptions, MeshStats};
 
 /// An export file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -14,8 +14,9 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::accessor::DataType;
 use gltf::animation::Property;
 
+use super::accessor;
 use super::buffers::Buffers;
-use super::{PartSource, SoupBuilder, accessor, import_with};
+use super::scene::{DecodedPrimitive, PartSource, SoupBuilder, check_len, import_with};
 use crate::anim::{
     AnimatedModel, Channel, Clip, ClipInfo, Influences, Instance, Interpolation, Node, Primitive, Sampler, Skin,
     Target, Trs,
@@ -142,11 +143,7 @@ fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
 }
 
 /// A decoded primitive with its morph-target position deltas and skin influences.
-fn read_primitive(
-    decoded: &super::DecodedPrimitive,
-    prim: &gltf::Primitive<'_>,
-    buffers: &Buffers,
-) -> Result<Primitive> {
+fn read_primitive(decoded: &DecodedPrimitive, prim: &gltf::Primitive<'_>, buffers: &Buffers) -> Result<Primitive> {
     let name = &decoded.name;
     let count = decoded.positions.len();
     let targets = prim
@@ -155,7 +152,7 @@ fn read_primitive(
         .map(|(k, target)| match target.positions() {
             Some(acc) => {
                 let deltas = accessor::read_vecs::<3>(&acc, buffers, &format!("{name} morph target {k} POSITION"))?;
-                super::check_len(name, &format!("morph target {k}"), deltas.len(), count)?;
+                check_len(name, &format!("morph target {k}"), deltas.len(), count)?;
                 if deltas.iter().flatten().any(|c| !c.is_finite()) {
                     return Err(VoxelError::NonFinite(format!("{name} morph target {k}")));
                 }
@@ -176,8 +173,8 @@ fn read_primitive(
         }
         let joints = accessor::read_vecs::<4>(&joints, buffers, &format!("{name} JOINTS_{set}"))?;
         let weights = accessor::read_vecs::<4>(&weights, buffers, &format!("{name} WEIGHTS_{set}"))?;
-        super::check_len(name, &format!("JOINTS_{set}"), joints.len(), count)?;
-        super::check_len(name, &format!("WEIGHTS_{set}"), weights.len(), count)?;
+        check_len(name, &format!("JOINTS_{set}"), joints.len(), count)?;
+        check_len(name, &format!("WEIGHTS_{set}"), weights.len(), count)?;
         if weights.iter().flatten().any(|w| !w.is_finite() || *w < 0.0) {
             return Err(VoxelError::Invalid(format!("{name}: WEIGHTS_{set} must be finite and not negative")));
         }

@@ -8,9 +8,9 @@ use draco_core::{DecodeLimits, DecoderBuffer, Mesh, MeshDecoder};
 use gltf::accessor::Accessor;
 use serde::Deserialize;
 
-use super::MAX_TRIANGLES;
 use super::accessor::{component_count, normalize};
 use super::buffers::Buffers;
+use super::validate::MAX_TRIANGLES;
 use crate::error::{Result, VoxelError};
 
 /// The extension's name.

@@ -87,6 +87,9 @@ fn to_rgba8(data: &gltf::image::Data) -> Result<Vec<[u8; 4]>> {
 
 /// Decodes `image` (embedded, data URI or a file next to `base_dir`) to an RGBA8 texture.
 fn decode(image: &gltf::Image<'_>, base_dir: Option<&Path>, buffers: &Buffers) -> Result<Arc<Texture>> {
+    if let Some(webp) = super::webp::decode_if_webp(image, base_dir, buffers) {
+        return webp.map(Arc::new);
+    }
     let source = image.source();
     if let gltf::image::Source::View { view, .. } = &source {
         // The gltf crate slices the buffer unchecked (and never sees decoded meshopt views).
@@ -137,12 +140,10 @@ impl MaterialCache {
         Ok(resolved)
     }
 
-    /// Decodes, on the thread pool, the base-colour images of the primitives of `meshes` (a failure is
-    /// reported when a material that uses the image is resolved, as without this).
-    pub fn prefetch<'a>(&mut self, meshes: impl Iterator<Item = gltf::Mesh<'a>>, buffers: &Buffers) {
-        let mut wanted: Vec<gltf::Image<'_>> = meshes
-            .flat_map(|mesh| mesh.primitives())
-            .filter(super::has_surface)
+    /// Decodes, on the thread pool, the base-colour images of `primitives` (a failure is reported when a
+    /// material that uses the image is resolved, as without this).
+    pub fn prefetch<'a>(&mut self, primitives: impl Iterator<Item = gltf::Primitive<'a>>, buffers: &Buffers) {
+        let mut wanted: Vec<gltf::Image<'_>> = primitives
             .filter_map(|prim| prim.material().pbr_metallic_roughness().base_color_texture())
             .map(|info| info.texture().source())
             .filter(|image| !self.images.contains_key(&image.index()))

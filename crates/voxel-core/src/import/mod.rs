@@ -1,34 +1,27 @@
 //! glTF 2.0 import (through the `gltf` crate) into a world-space [`TriangleSoup`].
 //!
 //! Handles .glb, .gltf with external buffers and images, data URIs, the default scene's node hierarchy
-//! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression
-//! and EXT_meshopt_compression. Files that require an extension we cannot decode are refused with an error
-//! naming it; malformed files are refused with an error naming what is wrong (see the `validate` module).
+//! (matrix or TRS, shared meshes), triangle lists/strips/fans, KHR_mesh_quantization, KHR_draco_mesh_compression,
+//! EXT_meshopt_compression and EXT_texture_webp. Files that require an extension we cannot decode are refused with
+//! an error naming it; malformed files are refused with an error naming what is wrong (see the `validate` module).
 
 mod accessor;
 mod animation;
 mod buffers;
 mod draco;
 mod materials;
+mod scene;
 mod validate;
+mod webp;
 
-use std::collections::HashMap;
 use std::path::Path;
 
-use glam::{DMat4, DVec3};
-use gltf::mesh::Mode;
-
 use crate::error::{Result, VoxelError};
-use crate::soup::{TriangleSoup, Vertex};
-
-use buffers::Buffers;
-use draco::DracoPrimitive;
-use materials::MaterialCache;
+use crate::soup::TriangleSoup;
+use scene::import_with;
 
 pub use animation::{load_animated_file, load_animated_slice};
-
-/// The most triangles an import may produce (node instancing can multiply a small file).
-pub const MAX_TRIANGLES: usize = 20_000_000;
+pub use validate::MAX_TRIANGLES;
 
 /// Imports a .glb or .gltf file (external buffers and images resolved next to it).
 pub fn load_file(path: &Path) -> Result<TriangleSoup> {
@@ -39,276 +32,4 @@ pub fn load_file(path: &Path) -> Result<TriangleSoup> {
 /// Imports glTF/GLB bytes; `base_dir` resolves relative URIs (none: only embedded data is allowed).
 pub fn load_slice(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriangleSoup> {
     import_with(bytes, base_dir, |_, builder| Ok(builder.soup))
-}
-
-/// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
-struct PartSource {
-    node: usize,
-    mesh: usize,
-    decoded: usize,
-    first_vertex: usize,
-}
-
-/// Imports the soup, then hands the document and the builder (the soup and what it was decoded from) to
-/// `finish`.
-fn import_with<T>(
-    bytes: &[u8],
-    base_dir: Option<&Path>,
-    finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
-) -> Result<T> {
-    let gltf::Gltf { document, blob } = validate::parse(bytes)?;
-    let document = validate::check(document)?;
-    let buffers = Buffers::load(&document, base_dir, blob)?;
-    let mut builder = SoupBuilder {
-        soup: TriangleSoup::default(),
-        materials: MaterialCache::new(base_dir),
-        document: &document,
-        buffers: &buffers,
-        parts_of_mesh: HashMap::new(),
-        instances: Vec::new(),
-    };
-    let instances = scene_instances(&document)?;
-    builder.materials.prefetch(instances.iter().filter_map(|(node, _)| node.mesh()), &buffers);
-    for (node, transform) in instances {
-        if let Some(mesh) = node.mesh() {
-            builder.add_mesh(node.index(), &mesh, &transform)?;
-        }
-    }
-    if builder.soup.triangle_count() == 0 {
-        return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
-    }
-    builder.soup.validate()?;
-    finish(&document, builder)
-}
-
-/// Every mesh-carrying node instance of the default scene with its composed world transform.
-fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMat4)>> {
-    let roots: Vec<gltf::Node<'_>> = match document.default_scene().or_else(|| document.scenes().next()) {
-        Some(scene) => scene.nodes().collect(),
-        None => {
-            // No scene: take the nodes nobody lists as a child.
-            let mut is_child = vec![false; document.nodes().len()];
-            for n in document.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
-                }
-            }
-            document.nodes().filter(|n| !is_child[n.index()]).collect()
-        }
-    };
-    let mut out = Vec::new();
-    // Depth-first with the ancestor chain, so a node that is its own ancestor is caught, not looped on.
-    let mut stack: Vec<(gltf::Node<'_>, DMat4, Vec<usize>)> =
-        roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY, Vec::new())).collect();
-    while let Some((node, parent, mut chain)) = stack.pop() {
-        if chain.contains(&node.index()) {
-            return Err(VoxelError::Invalid(format!(
-                "node {} is its own ancestor (recursive node graph)",
-                node.index()
-            )));
-        }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-        let world = parent * local;
-        if !world.is_finite() {
-            return Err(VoxelError::NonFinite(format!("the transform of node {}", node.index())));
-        }
-        chain.push(node.index());
-        if out.len() + stack.len() > MAX_TRIANGLES {
-            return Err(VoxelError::Invalid("the node graph expands to too many instances".into()));
-        }
-        for child in node.children().collect::<Vec<_>>().into_iter().rev() {
-            stack.push((child, world, chain.clone()));
-        }
-        if node.mesh().is_some() {
-            out.push((node, world));
-        }
-    }
-    Ok(out)
-}
-
-/// Whether `prim` draws triangles (points and lines have no surface to voxelize).
-fn has_surface(prim: &gltf::Primitive<'_>) -> bool {
-    !matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip)
-}
-
-/// Expands primitive indices of `mode` into triangle corner triples.
-fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
-    match mode {
-        Mode::Triangles => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
-        Mode::TriangleStrip => indices
-            .windows(3)
-            .enumerate()
-            .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
-            .collect(),
-        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
-        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
-    }
-}
-
-struct SoupBuilder<'a> {
-    soup: TriangleSoup,
-    materials: MaterialCache,
-    document: &'a gltf::Document,
-    buffers: &'a Buffers,
-    /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
-    parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
-    /// Where each part came from.
-    instances: Vec<PartSource>,
-}
-
-/// One primitive's triangles in mesh space with their attributes.
-struct DecodedPrimitive {
-    /// The glTF primitive index within its mesh.
-    primitive: usize,
-    material: usize,
-    name: String,
-    positions: Vec<[f32; 3]>,
-    uvs: Option<Vec<[f32; 2]>>,
-    colors: Option<Vec<[f32; 4]>>,
-    triangles: Vec<[u32; 3]>,
-}
-
-impl SoupBuilder<'_> {
-    fn add_mesh(&mut self, node: usize, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
-        if !self.parts_of_mesh.contains_key(&mesh.index()) {
-            let mut decoded = Vec::new();
-            for prim in mesh.primitives() {
-                if let Some(d) = self.decode_primitive(mesh, &prim)? {
-                    decoded.push(d);
-                }
-            }
-            self.parts_of_mesh.insert(mesh.index(), decoded);
-        }
-        let prims = &self.parts_of_mesh[&mesh.index()];
-        let added: usize = prims.iter().map(|p| p.triangles.len()).sum();
-        if self.soup.triangle_count() + added > MAX_TRIANGLES {
-            return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
-        }
-        for (decoded, prim) in prims.iter().enumerate() {
-            let first_vertex = self.soup.vertices().len();
-            self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
-            let part = self.soup.add_part(prim.material, prim.name.clone());
-            let world: Vec<[f32; 3]> = prim
-                .positions
-                .iter()
-                .map(|p| {
-                    transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
-                })
-                .collect();
-            let base = self.soup.add_sources(&world, 3 * prim.triangles.len());
-            for tri in &prim.triangles {
-                let corners = tri.map(|i| {
-                    let i = i as usize;
-                    Vertex {
-                        position: world[i],
-                        uv: prim.uvs.as_ref().map_or([0.0; 2], |u| u[i]),
-                        color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
-                    }
-                });
-                self.soup.push_indexed_triangle(part, corners, tri.map(|i| base + i));
-            }
-        }
-        Ok(())
-    }
-
-    fn decode_primitive(
-        &mut self,
-        mesh: &gltf::Mesh<'_>,
-        prim: &gltf::Primitive<'_>,
-    ) -> Result<Option<DecodedPrimitive>> {
-        let name = format!(
-            "{} primitive {}",
-            mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned),
-            prim.index()
-        );
-        if !has_surface(prim) {
-            return Ok(None);
-        }
-        let draco = DracoPrimitive::decode(prim, self.document, self.buffers, &name)?;
-        let Some((values, ncomp)) = self.attribute(prim, draco.as_ref(), gltf::Semantic::Positions, &name)? else {
-            return Err(VoxelError::Invalid(format!("{name} has no POSITION attribute")));
-        };
-        let positions = accessor::to_vecs::<3>(&values, ncomp, &format!("{name} POSITION"))?;
-        if positions.iter().flatten().any(|c| !c.is_finite()) {
-            return Err(VoxelError::NonFinite(name));
-        }
-        let indices = match (&draco, prim.indices()) {
-            (Some(draco), _) => draco.indices(),
-            (None, Some(acc)) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
-            (None, None) => (0..positions.len() as u32).collect(),
-        };
-        if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
-            return Err(VoxelError::Invalid(format!(
-                "{name}: vertex index {bad} is out of range (the primitive has {} vertices)",
-                positions.len()
-            )));
-        }
-        let (soup_material, tex_coord) = self.materials.resolve(&mut self.soup, &prim.material(), self.buffers)?;
-        let uvs = match tex_coord {
-            Some(set) => match self.attribute(prim, draco.as_ref(), gltf::Semantic::TexCoords(set.index), &name)? {
-                Some((values, ncomp)) => {
-                    let raw = accessor::to_vecs::<2>(&values, ncomp, &format!("{name} TEXCOORD_{}", set.index))?;
-                    check_len(&name, "TEXCOORD", raw.len(), positions.len())?;
-                    Some(raw.into_iter().map(|uv| set.transform(uv)).collect())
-                }
-                None => None,
-            },
-            None => None,
-        };
-        let colors = match self.attribute(prim, draco.as_ref(), gltf::Semantic::Colors(0), &name)? {
-            Some((values, ncomp)) => {
-                let c = accessor::to_colors(&values, ncomp, &format!("{name} COLOR_0"))?;
-                check_len(&name, "COLOR_0", c.len(), positions.len())?;
-                Some(c)
-            }
-            None => None,
-        };
-        Ok(Some(DecodedPrimitive {
-            primitive: prim.index(),
-            material: soup_material,
-            name,
-            positions,
-            uvs,
-            colors,
-            triangles: triangles_of(prim.mode(), &indices),
-        }))
-    }
-
-    /// The values of attribute `semantic` of `prim` (flat, with their component count): from its Draco stream
-    /// when that carries it, else from its accessor; `None` when the primitive has no such attribute.
-    fn attribute(
-        &self,
-        prim: &gltf::Primitive<'_>,
-        draco: Option<&DracoPrimitive>,
-        semantic: gltf::Semantic,
-        name: &str,
-    ) -> Result<Option<(Vec<f64>, usize)>> {
-        let Some(acc) = prim.get(&semantic) else { return Ok(None) };
-        let what = format!("{name} {}", semantic.to_string());
-        if let Some(decoded) = draco.map(|d| d.attribute(&semantic.to_string(), &acc, &what)).transpose()?.flatten() {
-            return Ok(Some(decoded));
-        }
-        accessor::read_accessor(&acc, self.buffers, &what).map(Some)
-    }
-}
-
-fn check_len(name: &str, what: &str, len: usize, expected: usize) -> Result<()> {
-    if len == expected {
-        Ok(())
-    } else {
-        Err(VoxelError::Invalid(format!("{name}: {what} has {len} elements but POSITION has {expected}")))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn strips_and_fans_expand_to_triangles() {
-        assert_eq!(triangles_of(Mode::TriangleStrip, &[0, 1, 2, 3]), vec![[0, 1, 2], [2, 1, 3]]);
-        assert_eq!(triangles_of(Mode::TriangleFan, &[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(triangles_of(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
-        assert!(triangles_of(Mode::Lines, &[0, 1, 2]).is_empty());
-    }
 }

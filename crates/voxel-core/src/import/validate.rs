@@ -7,6 +7,9 @@ use gltf::json::{Path as JsonPath, Root};
 
 use crate::error::{Result, VoxelError};
 
+/// The most triangles an import may produce (node instancing can multiply a small file).
+pub const MAX_TRIANGLES: usize = 20_000_000;
+
 /// Required extensions we decode (or that do not change geometry or base colour).
 const TOLERATED_REQUIRED: &[&str] = &[
     "KHR_draco_mesh_compression",
@@ -25,6 +28,7 @@ const TOLERATED_REQUIRED: &[&str] = &[
     "KHR_materials_anisotropy",
     "KHR_materials_dispersion",
     "KHR_lights_punctual",
+    super::webp::EXTENSION,
 ];
 
 /// How many validation problems an error message lists.
@@ -78,6 +82,7 @@ pub(super) fn check(document: gltf::Document) -> Result<gltf::Document> {
     }
     // The gltf crate does not list the extensions we decode ourselves as supported: validate without them.
     root.extensions_required.clear();
+    super::webp::use_webp_sources(&mut root)?;
     check_position_indices(&root)?;
     let mut problems = Vec::new();
     root.validate(&root, JsonPath::new, &mut |path: &dyn Fn() -> JsonPath, problem| {

@@ -2,18 +2,20 @@
 //!
 //! The app voxelizes the same soup again at every grid size the user picks, and the part analysis (welding,
 //! sheets, closed parts: see [`super`]) depends only on which corners share a position. So the soup keeps
-//! the analysis of its own positions ([`TriangleSoup::closed_parts`], found when a winding fill first needs
-//! it, dropped whenever its positions can change: a clone shares it, a new pose starts without one), and
+//! the analysis of its own positions ([`SoupParts::kept_by`], in the soup's position cache: found when a winding
+//! fill first needs it, dropped whenever its positions can change: a clone shares it, a new pose starts without
+//! one), and
 //! every grid on which no two of the soup's different positions land on the same grid point uses it (checked
 //! at every grid: its snapping can weld two corners less than a snapping step apart, and then that grid's
 //! own positions are analysed). The soup's positions are welded as the grid's are, so on such a grid the
 //! parts are exactly the ones the grid's positions give.
 
+use std::cell::Cell;
 use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::Parts;
+use super::parts::Parts;
 use super::weld::{all_different, grid_key, soup_key, weld, weld_indexed};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
@@ -28,6 +30,31 @@ pub(crate) struct SoupParts {
 }
 
 impl SoupParts {
+    /// The closed parts of `soup`'s positions, kept in its position cache: found on the first call.
+    /// A voxelization may start the analysis on one thread while another waits for it here, so the analysis must
+    /// not wait for the thread pool (it runs no rayon tasks): a thread blocked here then never holds work it needs.
+    pub(crate) fn kept_by(soup: &TriangleSoup) -> &Self {
+        thread_local!(static ANALYSING: Cell<bool> = const { Cell::new(false) });
+        /// Clears the flag however the analysis ends (a panic included: the thread lives on in the pool).
+        struct Analysing;
+        impl Drop for Analysing {
+            fn drop(&mut self) {
+                ANALYSING.set(false);
+            }
+        }
+        debug_assert!(!ANALYSING.get(), "the part analysis waited for the thread pool and ran into itself");
+        soup.position_cache().get_or_init(|| {
+            ANALYSING.set(true);
+            let _analysing = Analysing;
+            Self::of(soup)
+        })
+    }
+
+    /// Whether `soup` keeps its closed parts (found, and its positions not changed since).
+    pub(crate) fn kept(soup: &TriangleSoup) -> bool {
+        soup.position_cache().get::<Self>().is_some()
+    }
+
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
         let corners = soup.vertices();
@@ -61,7 +88,7 @@ fn position(p: [f32; 3]) -> DVec3 {
 /// The closed parts of `tris`, the triangles of `soup` on a grid: the soup's own when the grid keeps its
 /// different positions apart, else found with the grid's positions.
 pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &[GridTriangle]) -> Arc<Parts> {
-    let own = soup.closed_parts();
+    let own = SoupParts::kept_by(soup);
     if own.kept_apart_by(tris) { Arc::clone(&own.parts) } else { Arc::new(Parts::find(tris)) }
 }
 
@@ -69,9 +96,10 @@ pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &[GridTriangle]) -> Arc<Pa
 mod tests {
     use super::*;
     use crate::grid::{GridSize, GridSpec};
+    use crate::options::VoxelizeOptions;
     use crate::orient::weld::Welded;
     use crate::shapes::{IndexedMesh, cuboid};
-    use crate::voxelize::{VoxelizeOptions, voxelize};
+    use crate::voxelize::voxelize;
 
     /// A box [0, 1]³ and a box from x = 1 + `gap` to 2, each without its face towards the other.
     fn boxes(gap: f32) -> TriangleSoup {
@@ -167,7 +195,7 @@ mod tests {
         let tris = grid_tris(&soup, 4);
         let parts = closed_parts(&soup, &tris);
         assert_eq!(*parts, Parts::find(&tris));
-        assert_eq!((parts.count(), soup.closed_parts().parts.count()), (1, 0));
+        assert_eq!((parts.count(), SoupParts::kept_by(&soup).parts.count()), (1, 0));
     }
 
     fn welded_fields(w: Welded) -> (Vec<u32>, Vec<u32>) {
@@ -177,9 +205,9 @@ mod tests {
     #[test]
     fn the_importers_source_vertices_weld_as_the_corners_do() {
         let Some(dir) = crate::test_models::models_dir() else { return };
-        let mut files = crate::inputs::expand_inputs(std::slice::from_ref(&dir));
+        let mut files = crate::files::expand_inputs(std::slice::from_ref(&dir));
         for sub in std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().is_dir()) {
-            files.extend(crate::inputs::expand_inputs(&[sub.path()]));
+            files.extend(crate::files::expand_inputs(&[sub.path()]));
         }
         assert!(files.len() >= 17, "{} corpus models", files.len());
         let mut with_sources = 0;
@@ -218,7 +246,7 @@ mod tests {
         };
         let soup = indexed();
         assert_eq!(soup.sources().map(|s| (s.positions.len(), s.index.len())), Some((8, 36)));
-        assert_eq!(*soup.closed_parts().parts, *SoupParts::of(&TriangleSoup::from_mesh(&mesh, [1.0; 4])).parts);
+        assert_eq!(*SoupParts::kept_by(&soup).parts, *SoupParts::of(&TriangleSoup::from_mesh(&mesh, [1.0; 4])).parts);
         let mut moved = indexed();
         moved.vertices_mut()[0].position[0] = 0.5;
         let mut grown = indexed();

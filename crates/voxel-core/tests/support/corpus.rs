@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 
 /// The models of `dir` and of its subfolders, sorted.
 pub fn corpus(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = voxel_core::inputs::expand_inputs(&[dir.to_path_buf()]);
+    let mut files: Vec<PathBuf> = voxel_core::files::expand_inputs(&[dir.to_path_buf()]);
     for sub in std::fs::read_dir(dir).into_iter().flatten().flatten() {
         if sub.path().is_dir() {
-            files.extend(voxel_core::inputs::expand_inputs(&[sub.path()]));
+            files.extend(voxel_core::files::expand_inputs(&[sub.path()]));
         }
     }
     files.sort();

@@ -10,9 +10,11 @@ use voxel_core::{
 };
 
 #[cfg(feature = "cli")]
-use voxel_core::cli_animation::{ClipRequest, voxelize_clip};
+use voxel_core::cli::animation::{ClipRequest, voxelize_clip};
 #[cfg(feature = "cli")]
 use voxel_core::export::Format;
+#[cfg(feature = "cli")]
+use voxel_core::palette::ColorStage;
 
 use crate::common::{at_resolution, glb, model};
 
@@ -224,7 +226,7 @@ fn malformed_animation_data_is_an_error_and_the_static_import_still_works() {
 
 /// A cube on node 0 with one morph target (+1 along x for the corners at x = 1) and a translation, both
 /// animated by clip 0: weights 0 → 1 (STEP at t = 1), translation (0,0,0) → (4,0,0) linear over 2 s.
-fn morph_cube(scale_keys: Option<[f32; 9]>) -> Vec<u8> {
+pub(crate) fn morph_cube(scale_keys: Option<[f32; 9]>) -> Vec<u8> {
     let mut b = Buffers::default();
     let (pos, idx, corners) = b.cube();
     let deltas: Vec<f32> = corners.iter().flat_map(|p| [p[0], 0.0, 0.0]).collect();
@@ -440,7 +442,7 @@ fn the_milk_trucks_wheels_turn_rigidly_and_its_body_stays() {
 
 /// Writes `bytes` to a fresh temporary folder as `name`; returns the folder.
 #[cfg(feature = "cli")]
-fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+pub(crate) fn temp_model(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("voxel-core-anim-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -510,8 +512,16 @@ fn glb_frames_import_back_with_each_frames_cells() {
     // 0.25 along it, so every face lies on a cell boundary.
     let options = voxel_core::VoxelizeOptions { grid: voxel_core::GridSize::Resolution(24), ..Default::default() };
     // 2 s at 4 frames per second: frames 0..8, moving 2 cells each.
-    let request =
-        ClipRequest { animation: "0", fps: 4.0, duration: None, out: Some(&out), format: Format::Glb, json: true };
+    let colors = ColorStage::default();
+    let request = ClipRequest {
+        animation: "0",
+        fps: 4.0,
+        duration: None,
+        out: Some(&out),
+        format: Format::Glb,
+        json: true,
+        colors: &colors,
+    };
     let lines = voxelize_clip(&file, &request, &options).unwrap();
     let written = file_names(&out);
     assert_eq!(written, (0..8).map(|k| format!("box-{k:04}.glb")).collect::<Vec<_>>());
@@ -568,6 +578,7 @@ fn the_cli_reports_every_frame_as_json_and_names_bad_requests() {
         out: None,
         format: Format::Vox,
         json: true,
+        colors: &ColorStage::default(),
     };
     let lines = voxelize_clip(&file, &request, &options).unwrap();
     assert_eq!(lines.len(), 6);

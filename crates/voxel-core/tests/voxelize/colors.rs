@@ -24,7 +24,7 @@ fn subdivided(mut mesh: IndexedMesh, times: u32) -> IndexedMesh {
 }
 
 #[test]
-fn cells_far_from_the_surface_take_the_colour_of_the_nearest_face() {
+fn cells_far_from_the_surface_take_the_color_of_the_nearest_face() {
     // A cube without its +x face, one colour per face. Parity still fills it (every z column crosses the
     // bottom and the top), so the cells of the open side are visible although no triangle is near the
     // middle of that side: each must take the colour of the nearest of the five faces. Two triangles per

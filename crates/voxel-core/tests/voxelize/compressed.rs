@@ -33,7 +33,7 @@ fn twins(plain: &str, packed: &str) -> Option<(TriangleSoup, TriangleSoup)> {
     Some((a, b))
 }
 
-fn colour_by_cell(m: &VoxelModel) -> HashMap<[u16; 3], [u8; 4]> {
+fn color_by_cell(m: &VoxelModel) -> HashMap<[u16; 3], [u8; 4]> {
     m.voxels().map(|v| (v.cell, v.color)).collect()
 }
 
@@ -53,7 +53,7 @@ fn compressed_twins_give_the_same_cells_within_half_a_percent() {
 }
 
 #[test]
-fn compressed_twins_colour_from_the_same_textures() {
+fn compressed_twins_color_from_the_same_textures() {
     for (plain, packed) in TWINS {
         let Some((a, b)) = twins(plain, packed) else { return };
         let textures = |soup: &TriangleSoup| -> Vec<_> {
@@ -61,7 +61,7 @@ fn compressed_twins_colour_from_the_same_textures() {
         };
         assert_eq!(textures(&a), textures(&b), "{packed}: materials and textures");
         let opts = at_resolution(64);
-        let (ca, cb) = (colour_by_cell(&voxelize(&a, &opts).unwrap()), colour_by_cell(&voxelize(&b, &opts).unwrap()));
+        let (ca, cb) = (color_by_cell(&voxelize(&a, &opts).unwrap()), color_by_cell(&voxelize(&b, &opts).unwrap()));
         let common: Vec<_> = ca.keys().filter(|c| cb.contains_key(*c)).collect();
         let same = common.iter().filter(|c| ca[**c] == cb[**c]).count();
         println!("{packed}: {same} of {} common cells have the same colour", common.len());

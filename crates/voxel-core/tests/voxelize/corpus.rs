@@ -137,7 +137,7 @@ fn surface_colors(name: &str) -> Option<Vec<[u8; 4]>> {
 }
 
 #[test]
-fn vertex_colours_reach_the_voxels() {
+fn vertex_colors_reach_the_voxels() {
     let Some(colors) = surface_colors("khronos-boxvertexcolors.glb") else { return };
     let distinct: HashSet<_> = colors.iter().collect();
     assert!(distinct.len() > 100, "only {} colours", distinct.len());
@@ -190,7 +190,7 @@ fn every_file_of_the_corpus_voxelizes() {
     let Some(dir) = models_dir() else { return };
     let mut folders = vec![dir.clone()];
     folders.extend(std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()));
-    let files = voxel_core::inputs::expand_inputs(&folders);
+    let files = voxel_core::files::expand_inputs(&folders);
     // The 18 models of SOURCES.md, the three compressed ones among them.
     assert!(files.len() >= 18, "only {} model files in {}", files.len(), dir.display());
     for file in &files {

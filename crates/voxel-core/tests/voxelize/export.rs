@@ -15,7 +15,7 @@ fn read_back(model: &voxel_core::VoxelModel, name: &str) -> (dot_vox::DotVoxData
 }
 
 #[test]
-fn a_small_model_round_trips_with_its_colours() {
+fn a_small_model_round_trips_with_its_colors() {
     let mut soup = TriangleSoup::default();
     soup.add_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0, 0.0, 0.0, 1.0], "red");
     soup.add_mesh(&cuboid([1.0, 0.0, 0.0], [2.0, 1.0, 1.0]), [0.0, 0.0, 1.0, 1.0], "blue");
@@ -39,7 +39,7 @@ fn a_small_model_round_trips_with_its_colours() {
 }
 
 #[test]
-fn big_grids_split_into_several_models_and_many_colours_are_quantized() {
+fn big_grids_split_into_several_models_and_many_colors_are_quantized() {
     let cube = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
     let mut m =
         voxelize(&cube, &VoxelizeOptions { grid: GridSize::Resolution(300), hollow: true, ..Default::default() })

@@ -1,6 +1,7 @@
 //! Integration tests of voxel-core: analytic shapes, the real models of ../shared/models, colours,
 //! hostile input and .vox export. One test binary.
 
+mod animated_export;
 mod animation;
 mod colors;
 mod common;
@@ -12,4 +13,5 @@ mod gltf_export;
 mod meshopt;
 mod scale;
 mod shapes;
+mod webp;
 mod winding;

@@ -15,7 +15,8 @@ use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
 use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
 use crate::grid::{AscendingCoords, GridSpec};
-use crate::shell::{Shell, ShellOctree};
+use crate::shell::Shell;
+use crate::shell::octree::ShellOctree;
 use crate::soup::TriangleSoup;
 
 /// The steps to the six face neighbours.
@@ -25,7 +26,7 @@ const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0],
 const CELLS_PER_TASK: usize = 1024;
 
 /// The colour of a cell that no triangle can colour (every triangle has zero area), and its part.
-const NO_COLOUR: ([u8; 4], u32) = ([255; 4], 0);
+const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
 
 /// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
 /// weights of its closest point.
@@ -87,8 +88,8 @@ pub(crate) fn surface_colors(
     visible: &[u32],
     bvh: &OnceLock<TriangleBvh>,
 ) -> Vec<([u8; 4], u32)> {
-    let colour_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
-    let mut colors = vec![NO_COLOUR; visible.len()];
+    let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
+    let mut colors = vec![NO_COLOR; visible.len()];
     // Each task walks its visible cells and the shell's cells side by side, colours each cell at once, and
     // returns the positions of the cells it could not colour.
     let far: Vec<usize> = colors
@@ -124,7 +125,7 @@ pub(crate) fn surface_colors(
                     }),
                 };
                 match nearest {
-                    Some(nearest) => *color = colour_at(nearest),
+                    Some(nearest) => *color = color_at(nearest),
                     None => far.push(task * CELLS_PER_TASK + n),
                 }
             }
@@ -134,7 +135,7 @@ pub(crate) fn surface_colors(
     if !far.is_empty() {
         let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
         for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, bvh, &cells)) {
-            colors[n] = nearest.map_or(NO_COLOUR, colour_at);
+            colors[n] = nearest.map_or(NO_COLOR, color_at);
         }
     }
     colors

@@ -8,10 +8,17 @@ use std::time::Instant;
 use clap::Parser;
 
 use crate::error::{Result, VoxelError};
-use crate::export::{self, ExportOptions, Format, MeshStats, Written};
+use crate::export::{self, ExportOptions, Format};
+use crate::files::expand_inputs;
 use crate::grid::GridSize;
-use crate::inputs::expand_inputs;
-use crate::voxelize::{FillMode, Method, ShellMode, VoxelizeOptions, voxelize};
+use crate::options::{FillMode, Method, ShellMode, VoxelizeOptions};
+use crate::palette::ColorStage;
+use crate::voxelize::voxelize;
+use report::{Exported, stem, to_json};
+
+pub mod animation;
+pub mod palette;
+mod report;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
 /// through [`run`].
@@ -48,9 +55,9 @@ pub struct VoxelizeArgs {
     /// Keep only voxels with an empty face neighbour.
     #[arg(long)]
     hollow: bool,
-    /// Apply the pastel colour remap.
-    #[arg(long)]
-    pastel: bool,
+    /// The colour stage: --palette, --pastel, --colors, --dither.
+    #[command(flatten)]
+    pub(crate) palette: palette::PaletteArgs,
     /// Parity implementation (all give the same cells; reference is the slow per-point algorithm).
     #[arg(long, value_enum, default_value = "fast")]
     method: Method,
@@ -66,10 +73,11 @@ pub struct VoxelizeArgs {
     #[arg(long)]
     json: bool,
     /// Largest accepted grid in cells (memory guard).
-    #[arg(long, default_value_t = crate::voxelize::DEFAULT_MAX_CELLS)]
+    #[arg(long, default_value_t = crate::options::DEFAULT_MAX_CELLS)]
     max_cells: u64,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
-    /// --out is then a folder of <name>-<frame>.<format> files.
+    /// --out is then one animated file when it ends in .glb or .gltf, else a folder of
+    /// <name>-<frame>.<format> files.
     #[arg(long)]
     animation: Option<String>,
     /// Frames per second of --animation.
@@ -81,7 +89,7 @@ pub struct VoxelizeArgs {
 }
 
 impl VoxelizeArgs {
-    fn options(&self) -> VoxelizeOptions {
+    pub(crate) fn options(&self) -> VoxelizeOptions {
         VoxelizeOptions {
             model_size: self.model_size,
             grid: match (self.resolution, self.grid_size) {
@@ -94,7 +102,8 @@ impl VoxelizeArgs {
             shell: self.shell,
             hollow: self.hollow,
             method: self.method,
-            pastel: self.pastel,
+            // The colour stage applies the remap (`palette`).
+            pastel: false,
             max_cells: self.max_cells,
         }
     }
@@ -129,68 +138,40 @@ struct Report<'a> {
     exported: Exported,
 }
 
-/// The file an export wrote, as the reports show it (JSON fields `vox`, or `gltf` and `mesh`).
-#[derive(Debug, Default, serde::Serialize)]
-pub(crate) struct Exported {
-    /// The .vox written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    vox: Option<String>,
-    /// The .glb or .gltf written.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gltf: Option<String>,
-    /// What the glTF holds (faces before merging, rectangles after, bytes).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mesh: Option<MeshStats>,
-}
-
-impl Exported {
-    /// What writing `path` wrote.
-    pub(crate) fn new(path: &Path, written: Written) -> Self {
-        let path = Some(path.display().to_string());
-        match written {
-            Written::Vox(_) => Self { vox: path, ..Self::default() },
-            Written::Mesh(stats) => Self { gltf: path, mesh: Some(stats), ..Self::default() },
-        }
-    }
-
-    /// The end of a readable line: `, wrote <path>` (with the mesh's figures for a glTF), or nothing.
-    pub(crate) fn summary(&self) -> String {
-        match (self.vox.as_ref().or(self.gltf.as_ref()), self.mesh) {
-            (Some(p), Some(m)) => {
-                format!(", wrote {p} ({} faces as {} rectangles, {} bytes)", m.faces, m.quads, m.bytes)
-            }
-            (Some(p), None) => format!(", wrote {p}"),
-            (None, _) => String::new(),
-        }
-    }
-}
-
-/// The name of an input model: its file stem.
-pub(crate) fn stem(input: &Path) -> String {
-    input.file_stem().map_or_else(|| "model".into(), |s| s.to_string_lossy().into_owned())
-}
-
 fn export_path(out: &Path, input: &Path, several: bool, format: Format) -> PathBuf {
     if several { out.join(format!("{}.{}", stem(input), format.extension())) } else { out.to_owned() }
 }
 
-fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several: bool) -> Result<String> {
+pub(crate) fn process(
+    file: &Path,
+    args: &VoxelizeArgs,
+    options: &VoxelizeOptions,
+    colors: &ColorStage,
+    several: bool,
+) -> Result<String> {
     if let Some(animation) = &args.animation {
-        let request = crate::cli_animation::ClipRequest {
+        if several && args.out.as_deref().is_some_and(|out| Format::of_path(out) != Format::Vox) {
+            return Err(VoxelError::Parameter(
+                "one animated .glb/.gltf holds one model's clip: with several models, --out is a folder".into(),
+            ));
+        }
+        let request = animation::ClipRequest {
             animation,
             fps: args.fps,
             duration: args.duration,
             out: args.out.as_deref(),
             format: args.format(true),
             json: args.json,
+            colors,
         };
-        return crate::cli_animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
+        return animation::voxelize_clip(file, &request, options).map(|lines| lines.join("\n"));
     }
     let t0 = Instant::now();
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
-    let model = voxelize(&soup, options)?;
+    let mut model = voxelize(&soup, options)?;
+    colors.apply(&mut model)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
     let exported = match &args.out {
@@ -224,7 +205,7 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
             write_ms,
             exported,
         };
-        serde_json::to_string(&report).map_err(|e| VoxelError::Parameter(e.to_string()))
+        to_json(&report)
     } else {
         let [nx, ny, nz] = s.grid;
         let written = exported.summary();
@@ -245,11 +226,16 @@ fn process(file: &Path, args: &VoxelizeArgs, options: &VoxelizeOptions, several:
 pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
     match VoxelizeArgs::try_parse_from(args) {
         Ok(args) => execute(&args),
-        Err(e) => {
-            let _ = e.print();
-            if e.use_stderr() { 2 } else { 0 }
-        }
+        Err(e) => report_parse_error(&e),
     }
+}
+
+/// Prints what parsing a command line gave instead of arguments (a usage error, or the `--help` or
+/// `--version` text) and returns the exit status for it: 2 for an error, else 0. The one place that maps
+/// parse errors to exit statuses: `voxel-art`'s own command line uses it too.
+pub fn report_parse_error(error: &clap::Error) -> i32 {
+    let _ = error.print();
+    if error.use_stderr() { 2 } else { 0 }
 }
 
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
@@ -258,6 +244,13 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     // Start the thread pool's workers now: they come up while the first file is read.
     rayon::spawn(|| ());
     let options = args.options();
+    let colors = match args.palette.stage() {
+        Ok(stage) => stage,
+        Err((what, e)) => {
+            eprintln!("error: {what}: {e}");
+            return 1;
+        }
+    };
     let files = expand_inputs(&args.files);
     if files.is_empty() {
         eprintln!("error: no .glb or .gltf files found in the given folders");
@@ -273,7 +266,8 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     let stdout = std::io::stdout();
     for file in &files {
         progress.set_message(file.display().to_string());
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, several)));
+        let outcome =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
         match outcome {
             Ok(Ok(line)) => {
                 progress.suspend(|| {
@@ -312,7 +306,8 @@ mod tests {
             let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "4", "--json"];
             args.extend(extra);
             let args = VoxelizeArgs::try_parse_from(args).unwrap();
-            serde_json::from_str(&process(&input, &args, &args.options(), false).unwrap()).unwrap()
+            serde_json::from_str(&process(&input, &args, &args.options(), &ColorStage::default(), false).unwrap())
+                .unwrap()
         };
         let plain = report(&[]);
         assert_eq!(plain["voxels"], 4 * 2 * 2);

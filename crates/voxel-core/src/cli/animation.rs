@@ -1,16 +1,19 @@
 //! `voxel-art voxelize FILE --animation <name|index|list> [--fps 12] [--duration S] [--out DIR [--format
-//! vox|glb|gltf]] [--json]`: voxelizes a clip frame by frame in one grid fitted to all its poses (one file
-//! per frame in DIR), or lists the clips.
+//! vox|glb|gltf] | --out FILE.glb|FILE.gltf] [--json]`: voxelizes a clip frame by frame in one grid fitted to
+//! all its poses (one file per frame in DIR, or one animated glTF that plays the frames), or lists the clips.
 
 use std::path::Path;
 use std::time::Instant;
 
+use super::report::{Exported, stem, to_json};
 use crate::anim::AnimatedModel;
-use crate::cli::{Exported, stem};
 use crate::error::{Result, VoxelError};
-use crate::export::{self, ExportOptions, Format};
+use crate::export::animated::AnimatedGltf;
+use crate::export::{self, ExportOptions, Format, Written};
+use crate::options::VoxelizeOptions;
+use crate::palette::ColorStage;
 use crate::soup::TriangleSoup;
-use crate::voxelize::{VoxelizeOptions, voxelize_within};
+use crate::voxelize::voxelize_within;
 
 /// The most frames one command voxelizes (a guard against `--fps 1e9`).
 pub const MAX_FRAMES: usize = 100_000;
@@ -24,12 +27,14 @@ pub struct ClipRequest<'a> {
     pub fps: f32,
     /// Seconds to voxelize; one clip length when `None`.
     pub duration: Option<f32>,
-    /// A folder for `<stem>-<frame>.<format>` files.
+    /// A folder for `<stem>-<frame>.<format>` files, or one animated `.glb` / `.gltf` file.
     pub out: Option<&'a Path>,
     /// The format of the frames' files.
     pub format: Format,
     /// One JSON object per line instead of readable lines.
     pub json: bool,
+    /// The colour stage applied to every frame (with the first frame's chosen colours).
+    pub colors: &'a ColorStage,
 }
 
 /// One frame's JSON line.
@@ -48,6 +53,16 @@ struct FrameReport<'a> {
     exported: Exported,
 }
 
+/// The JSON line of a clip written as one animated glTF, after its frames' lines.
+#[derive(serde::Serialize)]
+struct AnimationReport<'a> {
+    file: &'a str,
+    clip: &'a str,
+    frames: usize,
+    #[serde(flatten)]
+    exported: Exported,
+}
+
 /// One clip's JSON line for `--animation list`.
 #[derive(serde::Serialize)]
 struct ClipReport<'a> {
@@ -56,10 +71,6 @@ struct ClipReport<'a> {
     clip: &'a str,
     duration: f32,
     channels: usize,
-}
-
-fn to_json(value: &impl serde::Serialize) -> Result<String> {
-    serde_json::to_string(value).map_err(|e| VoxelError::Parameter(e.to_string()))
 }
 
 /// Runs the request on `file` and returns the lines to print: one per clip for `list`, else one per frame.
@@ -78,22 +89,32 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
     })?;
     let info = model.clips()[clip].clone();
     let frames = frame_count(request.fps, request.duration.unwrap_or(info.duration))?;
-    if let Some(out) = request.out {
+    // An output path ending in .glb or .gltf is one animated file, anything else a folder of frames.
+    let single = request.out.filter(|out| Format::of_path(out) != Format::Vox);
+    let folder = request.out.filter(|_| single.is_none());
+    if let Some(out) = folder {
         std::fs::create_dir_all(out).map_err(|e| VoxelError::Export { path: out.to_owned(), reason: e.to_string() })?;
     }
     let stem = stem(file);
+    let mut animated = single.map(|_| AnimatedGltf::new(&ExportOptions { name: stem.clone() }));
     let bounds = model.clip_bounds(clip)?;
     let mut soup = TriangleSoup::default();
     let mut lines = Vec::with_capacity(frames);
+    // The colours chosen for the first frame serve every frame.
+    let mut frame_colors = request.colors.for_frames();
     for frame in 0..frames {
         let time = frame as f32 / request.fps;
         let t0 = Instant::now();
         model.pose_into(clip, time, &mut soup)?;
         let t1 = Instant::now();
-        let voxels = voxelize_within(&soup, options, bounds)?;
+        let mut voxels = voxelize_within(&soup, options, bounds)?;
+        frame_colors.apply(&mut voxels)?;
         let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
         let pose_ms = (t1 - t0).as_secs_f64() * 1e3;
-        let exported = match request.out {
+        if let Some(animated) = &mut animated {
+            animated.push_frame(&voxels, time)?;
+        }
+        let exported = match folder {
             Some(out) => {
                 let path = out.join(format!("{stem}-{frame:04}.{}", request.format.extension()));
                 let options = ExportOptions { name: format!("{stem}-{frame:04}") };
@@ -123,6 +144,16 @@ pub fn voxelize_clip(file: &Path, request: &ClipRequest<'_>, options: &VoxelizeO
                 s.visible,
                 exported.summary()
             )
+        });
+    }
+    if let (Some(animated), Some(path)) = (animated, single) {
+        let duration = frames as f32 / request.fps;
+        let written = Written::Mesh(animated.write(path, Format::of_path(path), &info.name, duration)?);
+        let exported = Exported::new(path, written);
+        lines.push(if request.json {
+            to_json(&AnimationReport { file: &name, clip: &info.name, frames, exported })?
+        } else {
+            format!("{name} [{}]: {frames} frames as one animation{}", info.name, exported.summary())
         });
     }
     Ok(lines)

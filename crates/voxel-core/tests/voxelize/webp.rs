@@ -1,0 +1,158 @@
+//! EXT_texture_webp: a textured model whose texture is re-encoded as WebP (built here from the corpus's
+//! Duck, its texture named only inside the extension, as glTF-Transform's `webp` command writes it) gives the
+//! same cells as the PNG original and the same colours.
+
+use serde_json::{Value, json};
+use voxel_core::{VoxelModel, load_slice, voxelize};
+
+use crate::common::{at_resolution, cells, glb, model};
+
+/// The document and binary chunk of a .glb.
+fn unpack(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).unwrap();
+    (serde_json::to_value(gltf.document.as_json()).unwrap(), gltf.blob.clone().unwrap())
+}
+
+/// `bytes` (a .glb whose textures' images are PNGs in buffer views) with every texture's image re-encoded by
+/// `encode` (RGBA8 pixels, width, height → WebP bytes) and named only by EXT_texture_webp.
+fn with_webp_textures(bytes: &[u8], encode: impl Fn(&[u8], u32, u32) -> Vec<u8>) -> Vec<u8> {
+    let (mut doc, mut bin) = unpack(bytes);
+    let textures = doc["textures"].as_array().unwrap().len();
+    for t in 0..textures {
+        let source = doc["textures"][t]["source"].as_u64().unwrap() as usize;
+        let view = &doc["bufferViews"][doc["images"][source]["bufferView"].as_u64().unwrap() as usize];
+        let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let png = &bin[offset..offset + view["byteLength"].as_u64().unwrap() as usize];
+        let rgba = image::load_from_memory(png).unwrap().into_rgba8();
+        let webp = encode(rgba.as_raw(), rgba.width(), rgba.height());
+        bin.resize(bin.len().next_multiple_of(4), 0);
+        let views = doc["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": webp.len()}));
+        let view = views.len() - 1;
+        bin.extend_from_slice(&webp);
+        let images = doc["images"].as_array_mut().unwrap();
+        images.push(json!({"bufferView": view, "mimeType": "image/webp"}));
+        let image = images.len() - 1;
+        let texture = doc["textures"][t].as_object_mut().unwrap();
+        texture.remove("source");
+        texture.insert("extensions".into(), json!({"EXT_texture_webp": {"source": image}}));
+    }
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    doc["buffers"][0]["byteLength"] = bin.len().into();
+    doc["extensionsUsed"] = json!(["EXT_texture_webp"]);
+    doc["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    glb(&doc, &bin)
+}
+
+/// Lossless WebP by the `image` crate.
+fn lossless(rgba: &[u8], width: u32, height: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut out)
+        .encode(rgba, width, height, image::ExtendedColorType::Rgba8)
+        .unwrap();
+    out
+}
+
+/// The mean sRGB colour of the visible voxels.
+fn mean_color(model: &VoxelModel) -> [f64; 3] {
+    let mut sum = [0.0f64; 3];
+    let mut n = 0.0;
+    for v in model.visible_voxels() {
+        for (s, &c) in sum.iter_mut().zip(&v.color) {
+            *s += f64::from(c);
+        }
+        n += 1.0;
+    }
+    sum.map(|s| s / n)
+}
+
+#[test]
+fn a_lossless_webp_duck_voxelizes_like_its_png_twin() {
+    let Some(path) = model("khronos-duck.glb") else { return };
+    let png = std::fs::read(path).unwrap();
+    let webp = with_webp_textures(&png, lossless);
+    let options = at_resolution(48);
+    let from_png = voxelize(&load_slice(&png, None).unwrap(), &options).unwrap();
+    let from_webp = voxelize(&load_slice(&webp, None).unwrap(), &options).unwrap();
+    assert_eq!(cells(&from_png), cells(&from_webp));
+    let (a, b) = (mean_color(&from_png), mean_color(&from_webp));
+    assert!((0..3).all(|k| (a[k] - b[k]).abs() <= 2.0), "{a:?} vs {b:?}");
+    // Lossless: every voxel's colour is the same.
+    assert!(from_png.voxels().eq(from_webp.voxels()));
+    assert!(from_png.stats.colors > 20, "textured: {}", from_png.stats.colors);
+}
+
+#[test]
+fn a_webp_source_that_is_not_an_image_is_named() {
+    let Some(path) = model("khronos-duck.glb") else { return };
+    let webp = with_webp_textures(&std::fs::read(path).unwrap(), lossless);
+    let (mut doc, bin) = unpack(&webp);
+    doc["textures"][0]["extensions"]["EXT_texture_webp"]["source"] = 7.into();
+    let err = load_slice(&glb(&doc, &bin), None).unwrap_err().to_string();
+    assert!(err.contains("texture 0: EXT_texture_webp source 7 is not one of the file's 2 images"), "{err}");
+}
+
+/// A unit square textured with `image` (a file of tests/data): a .gltf whose buffer is a data URI.
+fn textured_square(image: &str, webp: bool) -> Vec<u8> {
+    use base64::Engine;
+    let mut bin = Vec::new();
+    let corners = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
+    for c in corners.iter().flatten() {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    for [x, _, z] in corners {
+        bin.extend_from_slice(&x.to_le_bytes());
+        bin.extend_from_slice(&z.to_le_bytes());
+    }
+    for i in [0u16, 2, 1, 0, 3, 2, 0, 0] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let texture = if webp { json!({"extensions": {"EXT_texture_webp": {"source": 0}}}) } else { json!({"source": 0}) };
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": if webp { json!(["EXT_texture_webp"]) } else { json!([]) },
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [texture],
+        "images": [{"uri": image}],
+        "buffers": [{
+            "byteLength": bin.len(),
+            "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))
+        }],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    });
+    serde_json::to_vec(&doc).unwrap()
+}
+
+#[test]
+fn a_lossy_webp_file_texture_voxelizes_like_its_png_twin_within_8_of_255() {
+    // Made by tools/make-webp-pattern.mjs (our own pattern; libwebp at quality 75).
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let options = at_resolution(32);
+    let load = |image: &str, webp: bool| {
+        let soup = load_slice(&textured_square(image, webp), Some(&data)).unwrap();
+        voxelize(&soup, &options).unwrap()
+    };
+    let from_png = load("webp-pattern.png", false);
+    let from_webp = load("webp-pattern-lossy.webp", true);
+    assert_eq!(from_png.len(), 32 * 32);
+    assert_eq!(cells(&from_png), cells(&from_webp));
+    let (a, b) = (mean_color(&from_png), mean_color(&from_webp));
+    assert!((0..3).all(|k| (a[k] - b[k]).abs() <= 8.0), "{a:?} vs {b:?}");
+    assert!(from_webp.stats.colors >= 4, "the four quadrants: {}", from_webp.stats.colors);
+    // A file URI with no folder to read it from is a named error.
+    let err = load_slice(&textured_square("webp-pattern-lossy.webp", true), None).unwrap_err().to_string();
+    assert!(err.contains("image 0: webp-pattern-lossy.webp (no folder to read it from)"), "{err}");
+}
