@@ -5,13 +5,14 @@
 //! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `animation` (animated models
 //! posed and voxelized live, their cells followed by the voxels), `style` (Lego, bubbles,
 //! falling, mouse repel), `input`, `export` (saves the shown model as .vox and .glb), and the render-side
-//! `stage`, `camera`, `ui`, `preview`, `screenshot`. [`LogicPlugin`] holds everything that runs without a GPU,
-//! for tests.
+//! `stage`, `camera`, `ui`, `preview`, `screenshot` and `record` (an animated GIF of the stage; `cue` says
+//! when a headless capture begins). [`LogicPlugin`] holds everything that runs without a GPU, for tests.
 
 pub mod animation;
 pub mod assets;
 mod camera;
 pub mod config;
+mod cue;
 pub mod export;
 pub mod headless;
 pub mod input;
@@ -19,6 +20,7 @@ pub mod instancing;
 pub mod library;
 pub mod model;
 mod preview;
+pub mod record;
 pub mod rng;
 pub mod schedule;
 mod screenshot;
@@ -96,6 +98,7 @@ impl Plugin for AppPlugin {
         if let Some(screenshot) = self.args.screenshot_plugin() {
             app.add_plugins(screenshot);
         }
+        app.add_plugins(self.args.record_plugin());
         app.add_plugins(LogicPlugin);
     }
 }

@@ -74,6 +74,8 @@ pub struct ModelEntry {
     pub voxelize_ms: f32,
     /// The animation, when the file has clips (read by the same import as `soup`); `None` for a static model.
     pub animation: Option<Playback>,
+    /// Something of the file that is not shown, and why (an animation the core refuses: the model shows still).
+    pub warning: Option<String>,
 }
 
 impl ModelEntry {
@@ -90,6 +92,7 @@ impl ModelEntry {
             voxels_generation: None,
             voxelize_ms: 0.0,
             animation: None,
+            warning: None,
         }
     }
 
