@@ -79,11 +79,17 @@ pub(super) fn decode_if_webp(
 
 /// Decodes WebP bytes (lossy or lossless, with or without alpha) to an RGBA8 texture.
 fn decode(bytes: &[u8], what: &str) -> Result<Texture> {
-    let decoded = image::load_from_memory_with_format(bytes, image::ImageFormat::WebP)
-        .map_err(|e| VoxelError::MissingData(format!("{what}: undecodable WebP ({e})")))?
-        .into_rgba8();
-    let (width, height) = decoded.dimensions();
-    let pixels = decoded.pixels().map(|p| p.0).collect();
+    let undecodable = |e: &dyn std::fmt::Display| VoxelError::MissingData(format!("{what}: undecodable WebP ({e})"));
+    let mut decoder = image_webp::WebPDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| undecodable(&e))?;
+    let (width, height) = decoder.dimensions();
+    let size = decoder.output_buffer_size().ok_or_else(|| undecodable(&"the image is too large"))?;
+    let mut buf = vec![0; size];
+    decoder.read_image(&mut buf).map_err(|e| undecodable(&e))?;
+    let pixels = if decoder.has_alpha() {
+        buf.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
+    } else {
+        buf.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect()
+    };
     Texture::new(width, height, pixels)
 }
 
@@ -102,9 +108,7 @@ mod tests {
     fn lossless_webp_decodes_to_its_pixels_and_junk_is_an_error() {
         let pixels: Vec<u8> = (0..4 * 3 * 2).map(|i| (i * 37 % 256) as u8).collect();
         let mut bytes = Vec::new();
-        image::codecs::webp::WebPEncoder::new_lossless(&mut bytes)
-            .encode(&pixels, 3, 2, image::ExtendedColorType::Rgba8)
-            .unwrap();
+        image_webp::WebPEncoder::new(&mut bytes).encode(&pixels, 3, 2, image_webp::ColorType::Rgba8).unwrap();
         let texture = decode(&bytes, "image 0").unwrap();
         assert_eq!((texture.width, texture.height), (3, 2));
         let want: Vec<[u8; 4]> = pixels.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();

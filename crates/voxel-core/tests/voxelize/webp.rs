@@ -44,12 +44,10 @@ fn with_webp_textures(bytes: &[u8], encode: impl Fn(&[u8], u32, u32) -> Vec<u8>)
     glb(&doc, &bin)
 }
 
-/// Lossless WebP by the `image` crate.
+/// Lossless WebP by the `image-webp` crate (what `image` uses).
 fn lossless(rgba: &[u8], width: u32, height: u32) -> Vec<u8> {
     let mut out = Vec::new();
-    image::codecs::webp::WebPEncoder::new_lossless(&mut out)
-        .encode(rgba, width, height, image::ExtendedColorType::Rgba8)
-        .unwrap();
+    image_webp::WebPEncoder::new(&mut out).encode(rgba, width, height, image_webp::ColorType::Rgba8).unwrap();
     out
 }
 
