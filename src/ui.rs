@@ -229,8 +229,11 @@ fn panel(
     mut transition: ResMut<TransitionSettings>,
     export_status: Res<ExportStatus>,
     mut export: MessageWriter<ExportRequest>,
-    mut animation_requests: MessageWriter<AnimationRequest>,
-    (mut color_settings, palette_files): (ResMut<ColorSettings>, Res<PaletteFiles>),
+    (mut animation_requests, mut color_settings, palette_files): (
+        MessageWriter<AnimationRequest>,
+        ResMut<ColorSettings>,
+        Res<PaletteFiles>,
+    ),
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());

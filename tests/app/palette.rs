@@ -113,7 +113,9 @@ fn the_colour_limit_keeps_at_most_n_colours_and_dithering_stays_in_the_palette()
         assert_eq!(model.stats.colors, shown.len(), "the panel's count");
     }
     let gameboy = Palette::from_arg("gameboy").unwrap();
-    set_colors(&mut app, |c| c.0 = voxel_core::palette::ColorStage { palette: gameboy.clone(), max_colors: None, dither: true });
+    set_colors(&mut app, |c| {
+        c.0 = voxel_core::palette::ColorStage { palette: gameboy.clone(), max_colors: None, dither: true }
+    });
     step_counting_morphs(&mut app, 2);
     assert!(shown_colors(&app).is_subset(&colors_of(&gameboy)));
     assert_shows_model(&mut app);
@@ -134,7 +136,13 @@ fn a_dropped_hex_file_becomes_the_palette_and_a_bad_one_is_an_error() {
     drop_file(&mut app, hex.clone());
     let palette = app.world().resource::<ColorSettings>().0.palette.clone();
     let three: HashSet<[u8; 3]> = [[0x20, 0x20, 0x20], [0xf0, 0xe0, 0xd0], [0xc0, 0x40, 0x40]].into();
-    assert_eq!(palette, Palette::Fixed { name: hex.display().to_string(), colors: vec![[0x20; 3], [0xf0, 0xe0, 0xd0], [0xc0, 0x40, 0x40]] });
+    assert_eq!(
+        palette,
+        Palette::Fixed {
+            name: hex.display().to_string(),
+            colors: vec![[0x20; 3], [0xf0, 0xe0, 0xd0], [0xc0, 0x40, 0x40]]
+        }
+    );
     assert!(shown_colors(&app).is_subset(&three), "{:?}", shown_colors(&app));
     assert_eq!(app.world().resource::<ModelLibrary>().entries.len(), models, "a palette is not a model");
     assert_eq!(app.world().resource::<PaletteFiles>().palettes, vec![palette.clone()], "the picker offers it");
@@ -145,7 +153,10 @@ fn a_dropped_hex_file_becomes_the_palette_and_a_bad_one_is_an_error() {
     let error = app.world().resource::<PaletteFiles>().error.clone();
     assert_eq!(
         error.as_deref(),
-        Some(format!("error: {}: not a usable palette: line 2: \"not a colour\" is not a colour rrggbb", bad.display()).as_str())
+        Some(
+            format!("error: {}: not a usable palette: line 2: \"not a colour\" is not a colour rrggbb", bad.display())
+                .as_str()
+        )
     );
     assert_eq!(app.world().resource::<ColorSettings>().0.palette, palette, "the palette stays");
     assert_eq!(app.world().resource::<ModelLibrary>().entries.len(), models);
@@ -190,11 +201,8 @@ fn exporting_an_animated_model_also_writes_its_clip_as_one_animated_glb() {
     let pico8 = colors_of(&Palette::from_arg("pico8").unwrap());
     for k in [0, frames / 2, frames - 1] {
         back.pose_into(0, k as f32 / 30.0 + 1e-3, &mut soup).unwrap();
-        let shown: HashSet<[u8; 3]> = soup
-            .vertices()
-            .iter()
-            .map(|v| [0, 1, 2].map(|c| voxel_core::color::linear_to_srgb(v.color[c])))
-            .collect();
+        let shown: HashSet<[u8; 3]> =
+            soup.vertices().iter().map(|v| [0, 1, 2].map(|c| voxel_core::color::linear_to_srgb(v.color[c]))).collect();
         assert!(!shown.is_empty() && shown.is_subset(&pico8), "frame {k}: {shown:?}");
     }
     std::fs::remove_dir_all(&out).unwrap();
