@@ -4,7 +4,8 @@
 //! change to the model on screen's new voxels on their cells; and the Fox (`../shared/models`) running its Run
 //! clip for ten seconds of real time paced at 60 frames a second: the main thread's work per frame and the
 //! poses asked for, placed and dropped. Mean and median. `cargo bench --bench frame -- pile` runs only the
-//! pile (likewise static, recolour, morph, repel, slider, fox).
+//! pile (likewise static, recolour, morph, repel, slider, fox). `cargo bench --bench frame -- render` measures
+//! whole frames with Bevy's renderer instead (see `frame/render.rs`).
 
 use std::time::Instant;
 
@@ -15,6 +16,9 @@ use voxel_art::model::{ModelEntry, ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::transition::ActiveTransition;
 use voxel_core::shapes::uv_sphere;
 use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
+
+#[path = "frame/render.rs"]
+mod render;
 
 /// About 100k voxels: a solid sphere 58 cells across.
 fn big_model() -> voxel_core::VoxelModel {
@@ -93,6 +97,11 @@ fn wanted(name: &str) -> bool {
 }
 
 fn main() {
+    // The renderer's cases are long (two apps with Bevy's renderer each): only when asked for.
+    if std::env::args().skip(1).any(|a| a == "render") {
+        render::run();
+        return;
+    }
     if wanted("pile") {
         pile_step();
     }

@@ -14,7 +14,7 @@ use crate::input::PointerMode;
 use crate::library::LibrarySetup;
 use crate::record::{DEFAULT_SECONDS, HeadlessRecord, RecordPlugin, RecordSize};
 use crate::screenshot::ScreenshotPlugin;
-use crate::settings::Style;
+use crate::settings::{Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
 /// The whole command line: the app's arguments, or a subcommand.
@@ -86,6 +86,12 @@ pub struct AppArgs {
     /// burst bubbles; without it a screenshot ignores the pointer.
     #[arg(long)]
     pub repel: bool,
+    /// Cell width in model units (the model's diagonal is 9; the panel's grid size, 0.03 to 0.6).
+    #[arg(long, value_name = "CELL", value_parser = grid_cell)]
+    pub grid_size: Option<f32>,
+    /// Show every voxel, the interior too (hollow off).
+    #[arg(long)]
+    pub solid: bool,
     /// Start in this style (S cycles them).
     #[arg(long, value_enum)]
     pub style: Option<Style>,
@@ -105,11 +111,24 @@ pub struct AppArgs {
     pub anim_time: Vec<f32>,
 }
 
+/// Parses a `--grid-size` within the panel's range.
+fn grid_cell(text: &str) -> Result<f32, String> {
+    let cell: f32 = text.parse().map_err(|e| format!("{e}"))?;
+    let range = VoxelSettings::GRID_RANGE;
+    if range.contains(&cell) { Ok(cell) } else { Err(format!("{cell} is outside {}..={}", range.start(), range.end())) }
+}
+
 impl AppArgs {
     /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
     /// after `StatesPlugin`), when the pointer counts, the voxel-to-cell matching and the exports folder (call
     /// before the plugins that read them are added).
     pub fn configure(&self, app: &mut App) {
+        let defaults = VoxelSettings::default();
+        app.insert_resource(VoxelSettings {
+            grid_size: self.grid_size.unwrap_or(defaults.grid_size),
+            hollow: defaults.hollow && !self.solid,
+            ..defaults
+        });
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
         app.insert_state(self.style.unwrap_or_default());
         let headless = self.screenshot.is_some() || self.record.is_some();

@@ -1,14 +1,14 @@
 //! voxel-art: turns glTF/GLB models into animated voxel art — a Bevy app over the `voxel-core` library.
 //!
 //! Plugins (one per module, `pub(super) fn plugin`): `library` (fills the [`model::ModelLibrary`]), `voxelize`
-//! (async voxelization into [`model::VoxelModelAsset`]s), `instancing` (one entity per voxel, one mesh, one
-//! material, colour in `MeshTag`), `transition` (per-voxel tweened morphs), `animation` (animated models
-//! posed and voxelized live, their cells followed by the voxels), `style` (Lego, bubbles,
-//! falling, mouse repel), `input`, `export` (saves the shown model as .vox and .glb, an animated model's clip
-//! as one animated .glb), `palette` (recolours the models from their sampled colours when the colour stage
-//! changes, reads dropped palette files), and the render-side `stage`, `camera`, `ui`, `preview`,
-//! `screenshot` and `record` (an animated GIF of the stage; `cue` says when a headless capture begins).
-//! [`LogicPlugin`] holds everything that runs without a GPU, for tests.
+//! (async voxelization into [`model::VoxelModelAsset`]s), `instancing` (one entity per voxel, colour in
+//! `MeshTag`; the changed ones copied into one GPU buffer drawn by a few chunk entities), `transition`
+//! (per-voxel tweened morphs), `animation` (animated models posed and voxelized live, their cells followed by
+//! the voxels), `style` (Lego, bubbles, falling, mouse repel), `input`, `export` (saves the shown model as .vox
+//! and .glb, an animated model's clip as one animated .glb), `palette` (recolours the models from their sampled
+//! colours when the colour stage changes, reads dropped palette files), and the render-side `stage`, `camera`,
+//! `ui`, `preview`, `screenshot` and `record` (an animated GIF of the stage; `cue` says when a headless capture
+//! begins). [`LogicPlugin`] holds everything that runs without a GPU, for tests.
 
 pub mod animation;
 pub mod assets;

@@ -72,8 +72,8 @@ impl Default for VoxelSettings {
 }
 
 impl VoxelSettings {
-    /// The smallest and largest grid sizes the panel offers.
-    pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.08..=0.6;
+    /// The smallest and largest grid sizes the panel offers (0.03: about 256 cells along a model's longest side).
+    pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.03..=0.6;
 
     /// The voxelizer options these settings ask for in `style`.
     pub fn voxelize_options(&self, style: Style) -> VoxelizeOptions {
@@ -84,6 +84,8 @@ impl VoxelSettings {
             // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
             hollow: false,
             // Colours come out as sampled: the colour stage ([`ColorSettings`]) maps them afterwards.
+            // The grid is bounded by the core's memory budget; what the app draws is capped by `MAX_DRAWN`
+            // voxels instead.
             ..VoxelizeOptions::default()
         }
     }

@@ -19,8 +19,8 @@ use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, AnimationSystem, Lens, Tween, TweenAnim, TweeningPlugin};
 
 use crate::instancing::{
-    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, pack_color,
-    placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
+    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, drawn_count,
+    pack_color, placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
@@ -415,7 +415,7 @@ fn start(
     // A new box size or the hollow switch lays the model out again.
     let look = (settings.box_size, settings.hollow);
     let relook = last_look.is_some_and(|l| l != look);
-    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < model.shown_count(settings.hollow) {
+    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < drawn_count(model, settings.hollow) {
         return;
     }
     *last_look = Some(look);

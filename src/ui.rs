@@ -9,7 +9,7 @@ use voxel_core::palette::{ColorStage, FIXED_NAMES, Palette};
 use crate::animation::AnimationRequest;
 use crate::export::{ExportRequest, ExportStatus};
 use crate::input::{PointerOverUi, ToggleRecord};
-use crate::instancing::VoxelPool;
+use crate::instancing::{MAX_DRAWN, VoxelPool};
 use crate::library::LibraryRequest;
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::palette::PaletteFiles;
@@ -211,6 +211,9 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         let s = model.stats;
         let shown = model.shown_count(hollow);
         ui.label(format!("{shown} voxels shown ({} filled, {} visible)", s.voxels, s.visible));
+        if shown > MAX_DRAWN {
+            ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("drawing the first {MAX_DRAWN} (the cap)"));
+        }
         ui.label(format!(
             "grid {}×{}×{}, {} triangles, {} colours",
             s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors

@@ -1,17 +1,53 @@
-// Voxel fragment shader: StandardMaterial lighting with the base colour taken from the instance's MeshTag
-// (sRGB RGBA8 packed as r | g << 8 | b << 16 | a << 24).
+// The voxels' main pass: each box of a chunk's mesh placed at its voxel (voxel_common.wgsl), StandardMaterial
+// lighting with the voxel's colour (sRGB RGBA8) as base colour.
 #import bevy_pbr::{
     pbr_fragment::pbr_input_from_standard_material,
     pbr_functions::{alpha_discard, apply_pbr_lighting, main_pass_post_lighting_processing},
     forward_io::{VertexOutput, FragmentOutput},
-    mesh_functions,
+    view_transformations::position_world_to_clip,
 }
 #import bevy_render::color_operations::srgb_to_linear
+#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, point_to_world, normal_to_world}
+
+struct VoxelVertex {
+    @builtin(instance_index) instance_index: u32,
+    @builtin(vertex_index) vertex_index: u32,
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+struct VoxelVertexOutput {
+    @builtin(position) position: vec4<f32>,
+    @location(0) world_position: vec4<f32>,
+    @location(1) world_normal: vec3<f32>,
+    @location(2) @interpolate(flat) color: u32,
+    @location(3) @interpolate(flat) instance_index: u32,
+}
+
+@vertex
+fn vertex(in: VoxelVertex) -> VoxelVertexOutput {
+    let vertex = box_vertex(in.instance_index, in.vertex_index);
+    let world = point_to_world(vertex.voxel, flipped(vertex.flip, in.position));
+    var out: VoxelVertexOutput;
+    out.world_position = vec4(world, 1.0);
+    out.position = position_world_to_clip(world);
+    out.world_normal = normal_to_world(vertex.voxel, flipped(vertex.flip, in.normal));
+    out.color = vertex.voxel.color;
+    out.instance_index = in.instance_index;
+    return out;
+}
 
 @fragment
-fn fragment(in: VertexOutput, @builtin(front_facing) is_front: bool) -> FragmentOutput {
+fn fragment(voxel: VoxelVertexOutput, @builtin(front_facing) is_front: bool) -> FragmentOutput {
+    var in: VertexOutput;
+    in.position = voxel.position;
+    in.world_position = voxel.world_position;
+    in.world_normal = voxel.world_normal;
+#ifdef VERTEX_OUTPUT_INSTANCE_INDEX
+    in.instance_index = voxel.instance_index;
+#endif
     var pbr_input = pbr_input_from_standard_material(in, is_front);
-    let c = unpack4x8unorm(mesh_functions::get_tag(in.instance_index));
+    let c = unpack4x8unorm(voxel.color);
     pbr_input.material.base_color = pbr_input.material.base_color * vec4(srgb_to_linear(c.rgb), 1.0);
     pbr_input.material.base_color = alpha_discard(pbr_input.material, pbr_input.material.base_color);
     var out: FragmentOutput;

@@ -10,8 +10,8 @@ use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
 use crate::instancing::{
-    RepelOffset, Vacant, VoxelAssets, VoxelCloud, VoxelHome, VoxelPool, VoxelTarget, grow_pool, pack_color,
-    targets_for, unpack_color, voxel_transform,
+    RepelOffset, Vacant, VoxelCloud, VoxelHome, VoxelPool, VoxelTarget, grow_pool, pack_color, targets_for,
+    unpack_color, voxel_transform,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
@@ -99,7 +99,6 @@ pub(super) fn follow(
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     active: Res<ActiveTransition>,
-    assets: Res<VoxelAssets>,
     mut pool: ResMut<VoxelPool>,
     vacant: Query<Entity, With<Vacant>>,
     mut voxels: Slots,
@@ -165,7 +164,7 @@ pub(super) fn follow(
                     next_free += 1;
                 }
                 if next_free == used.len() {
-                    grow_pool(&mut commands, &mut pool, &assets, used.len() + 1);
+                    grow_pool(&mut commands, &mut pool, used.len() + 1);
                     used.push(false);
                 }
                 (next_free as u32, Vec3::ZERO)

@@ -1,7 +1,10 @@
-//! The voxel pool: one entity per voxel, all sharing one mesh and one material (one batch), each voxel's
-//! colour packed in its `MeshTag`. The pool grows to the largest model shown and hides its spares. While no
-//! model is ready, random pastel boxes float in its place. The `transition` plugin lays models out.
+//! The voxel pool: one entity per voxel (its transform, its colour packed in its `MeshTag`, its visibility),
+//! which the transition and the styles move; none of them is a mesh entity. The render side ([`gpu`]) copies
+//! what changed into one storage buffer drawn by a few chunk entities (one instanced draw per view). The pool
+//! grows to the largest model shown and hides its spares. While no model is ready, random pastel boxes float in
+//! its place. The `transition` plugin lays models out.
 
+pub mod gpu;
 pub mod material;
 pub mod mesh;
 
@@ -9,8 +12,10 @@ use bevy::color::Hsla;
 use bevy::math::{Affine3A, Mat3A};
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
+use bevy::render::storage::ShaderBuffer;
 
-pub use material::{VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
+pub use gpu::{Detail, GpuVoxel, GpuVoxels, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
+pub use material::{ChunkLayout, VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 
 use voxel_core::Voxel;
 
@@ -19,12 +24,18 @@ use crate::rng::Rng;
 use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
 
-/// The shared mesh and material of every voxel (made when the plugin is built, so styles can dress them from
-/// the first state transition on).
+/// The voxels' shape (detailed and low detail), the chunk meshes repeating them and the material (made when
+/// the plugin is built, so styles can dress them from the first state transition on).
 #[derive(Resource, Debug, Clone)]
 pub struct VoxelAssets {
     /// The voxel shape (the style's: a rounded box to start with).
     pub mesh: Handle<Mesh>,
+    /// The shape drawn when a voxel covers a few pixels (the box's three faces towards the viewer).
+    pub low_mesh: Handle<Mesh>,
+    /// [`VOXELS_PER_CHUNK`] copies of the shape, the mesh chunk entities draw …
+    pub chunk_mesh: Handle<Mesh>,
+    /// … and of the low detail shape.
+    pub low_chunk_mesh: Handle<Mesh>,
     /// The one material.
     pub material: Handle<VoxelMaterial>,
 }
@@ -33,9 +44,21 @@ impl FromWorld for VoxelAssets {
     fn from_world(world: &mut World) -> Self {
         let roundness =
             world.get_resource::<VoxelSettings>().map_or(VoxelSettings::default().roundness, |s| s.roundness);
-        let mesh = world.resource_mut::<Assets<Mesh>>().add(mesh::rounded_box(roundness, 2));
-        let material = world.resource_mut::<Assets<VoxelMaterial>>().add(voxel_material());
-        Self { mesh, material }
+        let (shape, low) = (mesh::rounded_box(roundness, 2), mesh::facing_box(false));
+        let layout = ChunkLayout::of(&shape, &low);
+        let (chunk, low_chunk) = (mesh::chunk_mesh(&shape), mesh::chunk_mesh(&low));
+        let mut meshes = world.resource_mut::<Assets<Mesh>>();
+        let (mesh, low_mesh) = (meshes.add(shape), meshes.add(low));
+        let (chunk_mesh, low_chunk_mesh) = (meshes.add(chunk), meshes.add(low_chunk));
+        // A placeholder until the pool has voxels (the render side replaces it at the pool's size).
+        let size = VOXELS_PER_CHUNK * size_of::<GpuVoxel>();
+        let voxels = world
+            .resource_mut::<Assets<ShaderBuffer>>()
+            .add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
+        let mut material = voxel_material(voxels);
+        material.extension.layout = layout;
+        let material = world.resource_mut::<Assets<VoxelMaterial>>().add(material);
+        Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material }
     }
 }
 
@@ -131,18 +154,30 @@ pub fn voxel_target(model: &voxel_core::VoxelModel, v: &Voxel, box_size: f32) ->
     VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color, part: v.part }
 }
 
-/// The voxel layout of `model` (only its visible voxels when `hollow`) with boxes `box_size` of a cell.
+/// The most voxels the app draws: a model with more shows its first this many (the panel says so).
+pub const MAX_DRAWN: usize = 2_000_000;
+
+/// How many voxels of `model` are drawn (only its visible ones when `hollow`; at most [`MAX_DRAWN`]).
+pub fn drawn_count(model: &VoxelModelAsset, hollow: bool) -> usize {
+    model.shown_count(hollow).min(MAX_DRAWN)
+}
+
+/// The voxel layout of `model` (only its visible voxels when `hollow`, at most [`MAX_DRAWN`]) with boxes
+/// `box_size` of a cell.
 pub fn targets_for(model: &VoxelModelAsset, box_size: f32, hollow: bool) -> Vec<VoxelTarget> {
-    model.shown(hollow).map(|v| voxel_target(model, &v, box_size)).collect()
+    model.shown(hollow).take(MAX_DRAWN).map(|v| voxel_target(model, &v, box_size)).collect()
 }
 
 /// Number of placeholder boxes shown before any model is ready.
 pub const PLACEHOLDER_COUNT: usize = 240;
 
+/// The cell of the placeholder boxes.
+pub const PLACEHOLDER_CELL: f32 = 0.24;
+
 /// Random pastel boxes around the origin (the article's start-up state).
 pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
     let mut rng = Rng::new(seed);
-    let cell = 0.24;
+    let cell = PLACEHOLDER_CELL;
     (0..count)
         .map(|_| {
             let mut coord = || ((rng.f32() - 0.5) * 6.0 / cell).round() * cell;
@@ -153,12 +188,10 @@ pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
         .collect()
 }
 
-fn voxel_bundle(assets: &VoxelAssets, slot: u32) -> impl Bundle {
+fn voxel_bundle(slot: u32) -> impl Bundle {
     (
         Name::new("voxel"),
         VoxelSlot(slot),
-        Mesh3d(assets.mesh.clone()),
-        MeshMaterial3d(assets.material.clone()),
         MeshTag(0),
         VoxelHome::default(),
         RepelOffset::default(),
@@ -168,16 +201,16 @@ fn voxel_bundle(assets: &VoxelAssets, slot: u32) -> impl Bundle {
 }
 
 /// Makes sure the pool has at least `count` slots.
-pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, assets: &VoxelAssets, count: usize) {
+pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, count: usize) {
     while pool.slots.len() < count {
         let slot = pool.slots.len() as u32;
-        pool.slots.push(commands.spawn(voxel_bundle(assets, slot)).id());
+        pool.slots.push(commands.spawn(voxel_bundle(slot)).id());
     }
 }
 
-fn setup(mut commands: Commands, assets: Res<VoxelAssets>, mut pool: ResMut<VoxelPool>) {
+fn setup(mut commands: Commands, mut pool: ResMut<VoxelPool>) {
     commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible));
-    grow_pool(&mut commands, &mut pool, &assets, PLACEHOLDER_COUNT);
+    grow_pool(&mut commands, &mut pool, PLACEHOLDER_COUNT);
 }
 
 /// The voxels' query: slot, transform, colour, visibility (the cloud excluded).
@@ -210,14 +243,13 @@ pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], rotation: Qu
 fn grow_for_current(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
-    assets: Res<VoxelAssets>,
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
 ) {
-    let needed = library.current_ready(&models).map_or(0, |(_, m)| m.shown_count(settings.hollow));
+    let needed = library.current_ready(&models).map_or(0, |(_, m)| drawn_count(m, settings.hollow));
     if needed > pool.slots.len() {
-        grow_pool(&mut commands, &mut pool, &assets, needed);
+        grow_pool(&mut commands, &mut pool, needed);
     }
 }
 
@@ -225,6 +257,9 @@ fn grow_for_current(
 pub(super) fn plugin(app: &mut App) {
     if !app.world().contains_resource::<Assets<VoxelMaterial>>() {
         app.init_asset::<VoxelMaterial>();
+    }
+    if !app.world().contains_resource::<Assets<ShaderBuffer>>() {
+        app.init_asset::<ShaderBuffer>();
     }
     app.init_resource::<VoxelPool>();
     app.init_resource::<VoxelAssets>();
@@ -240,7 +275,7 @@ pub(super) fn plugin(app: &mut App) {
     );
 }
 
-/// Rendering: the material's pipeline.
-pub(super) fn render_plugin(app: &mut App) {
-    app.add_plugins(MaterialPlugin::<VoxelMaterial>::default());
+/// Rendering: the material's pipeline, the voxel buffer and the chunks that draw it.
+pub fn render_plugin(app: &mut App) {
+    app.add_plugins((MaterialPlugin::<VoxelMaterial>::default(), gpu::plugin));
 }

@@ -1,7 +1,8 @@
 //! The falling style's ECS side: on entering the style (or on F) the model's voxels let go, once their morph
 //! has finished, and become a [`Pile`] stepped at the fixed rate. Every solid voxel falls, the interior a hollow
-//! display hides included, so the model lands as a heap with its volume; F again, another model or leaving the style sends
-//! them back to their cells (a [`Reassemble`] message: the transition morphs them from where they lie).
+//! display hides included, so the model lands as a heap with its volume (above [`FALL_CAP`] voxels, in clumps); F
+//! again, another model or leaving the style sends them back to their cells (a [`Reassemble`] message: the
+//! transition morphs them from where they lie).
 
 use bevy::prelude::*;
 
@@ -9,7 +10,7 @@ use crate::input::ToggleFall;
 use bevy::mesh::MeshTag;
 
 use crate::instancing::{
-    RepelOffset, VoxelAssets, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, floor_height, grow_pool, pack_color,
+    MAX_DRAWN, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, floor_height, grow_pool, pack_color,
     voxel_target, voxel_transform,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
@@ -19,9 +20,17 @@ use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, Transi
 
 use super::pile::{Pile, PileParams};
 
-/// A voxel that is part of the falling pile, with its index in it.
+/// The most bodies the pile simulates: a model with more voxels falls in clumps of neighbouring voxels (slots
+/// are in Morton order, so consecutive ones are near), ⌈voxels / `FALL_CAP`⌉ a clump, each one body of the pile.
+pub const FALL_CAP: usize = 100_000;
+
+/// A voxel that is part of the falling pile, with the index of its body in it.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Falling(pub u32);
+
+/// Where a voxel of a clump sits from its clump's body (only when the model falls in clumps).
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct ClumpOffset(pub Vec3);
 
 /// The pile in motion.
 #[derive(Resource, Debug)]
@@ -67,7 +76,7 @@ fn request_fall(mut requested: ResMut<FallRequested>) {
 /// Ends the pile: the voxels stay where they lie until the transition moves them.
 fn release(commands: &mut Commands, falling: &Query<Entity, With<Falling>>) {
     for entity in falling {
-        commands.entity(entity).remove::<Falling>();
+        commands.entity(entity).remove::<(Falling, ClumpOffset)>();
     }
     commands.remove_resource::<FallingPile>();
 }
@@ -97,7 +106,6 @@ fn control(
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     mut pool: ResMut<VoxelPool>,
-    assets: Res<VoxelAssets>,
     active: Res<ActiveTransition>,
     resting: Res<RestingOn>,
     mut requested: ResMut<FallRequested>,
@@ -138,14 +146,15 @@ fn control(
     let Some(model) = models.get(id) else { return };
     // The voxels a hollow display hides fall too, from their cells, on spare slots of the pool.
     let interior: Vec<_> = if settings.hollow {
-        model.voxels().filter(|v| !v.visible).map(|v| voxel_target(model, &v, settings.box_size)).collect()
+        let room = MAX_DRAWN.saturating_sub(pool.visible);
+        model.voxels().filter(|v| !v.visible).take(room).map(|v| voxel_target(model, &v, settings.box_size)).collect()
     } else {
         Vec::new()
     };
     let needed = pool.visible + interior.len();
     if pool.slots.len() < needed {
         // The new slots exist from the next frame on.
-        grow_pool(&mut commands, &mut pool, &assets, needed);
+        grow_pool(&mut commands, &mut pool, needed);
         return;
     }
     // In slot order: query order depends on how tables were rearranged, and the pile must not.
@@ -159,23 +168,34 @@ fn control(
         return;
     }
     let turn = active.turn();
-    let cell = model.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size;
+    let starts: Vec<Vec3> = shown.iter().map(|s| s.2).chain(interior.iter().map(|t| turn * t.position)).collect();
+    let clump = starts.len().div_ceil(FALL_CAP);
+    // A clump is a body as wide as its voxels together.
+    let cell = model.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size * (clump as f32).cbrt();
     let params = PileParams::for_cell(cell, floor_height(model));
-    let starts = shown.iter().map(|s| s.2).chain(interior.iter().map(|t| turn * t.position)).collect();
-    let pile = Pile::new(starts, params, seed.0);
+    let bodies = starts.chunks(clump).map(|c| c[0]).collect();
+    let pile = Pile::new(bodies, params, seed.0);
     seed.0 += 1;
+    let place = |commands: &mut Commands, entity: Entity, i: usize| {
+        let body = i / clump;
+        commands.entity(entity).insert(Falling(body as u32));
+        if clump > 1 {
+            commands.entity(entity).insert(ClumpOffset(starts[i] - starts[body * clump]));
+        }
+    };
     for (i, (_, entity, _)) in shown.iter().enumerate() {
-        commands.entity(*entity).insert(Falling(i as u32));
+        place(&mut commands, *entity, i);
     }
     for (k, t) in interior.iter().enumerate() {
-        commands.entity(pool.slots[pool.visible + k]).insert((
+        let entity = pool.slots[pool.visible + k];
+        commands.entity(entity).insert((
             voxel_transform(turn, t.position, t.scale),
             MeshTag(pack_color(t.color)),
             Visibility::Inherited,
             VoxelHome { position: t.position, scale: t.scale, part: t.part },
             RepelOffset::default(),
-            Falling((shown.len() + k) as u32),
         ));
+        place(&mut commands, entity, shown.len() + k);
     }
     commands.insert_resource(FallingPile { pile, model: id });
 }
@@ -186,14 +206,17 @@ fn step(mut pile: ResMut<FallingPile>) {
 }
 
 /// Writes the pile's positions into the falling voxels (their global transform too: voxels have no parent).
-fn sync(pile: Res<FallingPile>, mut voxels: Query<(&Falling, &mut Transform, &mut GlobalTransform)>) {
+fn sync(
+    pile: Res<FallingPile>,
+    mut voxels: Query<(&Falling, Option<&ClumpOffset>, &mut Transform, &mut GlobalTransform)>,
+) {
     if !pile.is_changed() {
         return;
     }
-    voxels.par_iter_mut().for_each(|(falling, mut transform, mut global)| {
+    voxels.par_iter_mut().for_each(|(falling, offset, mut transform, mut global)| {
         if let Some(p) = pile.pile.positions.get(falling.0 as usize) {
             let transform = transform.bypass_change_detection();
-            transform.translation = *p;
+            transform.translation = *p + offset.map_or(Vec3::ZERO, |o| o.0);
             *global = GlobalTransform::from(*transform);
         }
     });

@@ -14,7 +14,8 @@ pub mod repel;
 
 use bevy::prelude::*;
 
-use crate::instancing::{Vacant, VoxelAssets, VoxelCloud, VoxelMaterial, mesh::rounded_box};
+use crate::instancing::mesh::{facing_box, rounded_box};
+use crate::instancing::{Vacant, VoxelAssets, VoxelCloud, VoxelMaterial};
 use crate::schedule::AppSystems;
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::VoxelTween;
@@ -31,6 +32,12 @@ pub fn style_mesh(style: Style, roundness: f32) -> Mesh {
         Style::Lego => meshes::brick(),
         Style::Bubbles => meshes::bubble(),
     }
+}
+
+/// The low detail mesh of a style (drawn when voxels cover a few pixels): the three faces of a box that face the
+/// viewer, shaded like a sphere for bubbles.
+pub fn style_low_mesh(style: Style) -> Mesh {
+    facing_box(style == Style::Bubbles)
 }
 
 /// The material look of a style: (perceptual roughness, reflectance).
@@ -52,6 +59,7 @@ fn wear_style(
 ) {
     let style = *style.get();
     let _ = meshes.insert(&assets.mesh, style_mesh(style, settings.roundness));
+    let _ = meshes.insert(&assets.low_mesh, style_low_mesh(style));
     if let Some(mut material) = materials.get_mut(&assets.material) {
         (material.base.perceptual_roughness, material.base.reflectance) = style_surface(style);
     }

@@ -97,3 +97,21 @@ fn bad_arguments_are_usage_errors() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8(out.stderr).unwrap().contains("sideways"));
 }
+
+#[test]
+fn grid_size_and_solid_set_the_starting_voxel_settings() {
+    use voxel_art::config::Cli;
+    use voxel_art::settings::VoxelSettings;
+    let parse = |args: &[&str]| {
+        Cli::parse_args(std::iter::once("voxel-art").chain(args.iter().copied()).map(Into::into).collect())
+    };
+    let Ok(Cli { app: args, .. }) = parse(&["--grid-size", "0.03", "--solid"]) else { panic!("rejected") };
+    let app = crate::harness::test_app(voxel_art::config::AppArgs { no_shipped: true, ..args });
+    let settings = app.world().resource::<VoxelSettings>();
+    assert_eq!((settings.grid_size, settings.hollow), (0.03, false));
+    let defaults = crate::harness::test_app(voxel_art::config::AppArgs { no_shipped: true, ..Default::default() });
+    assert_eq!(*defaults.world().resource::<VoxelSettings>(), VoxelSettings::default());
+    // Outside the panel's range: a usage error (status 2), not a panic.
+    assert_eq!(parse(&["--grid-size", "0.001"]).err(), Some(2));
+    assert_eq!(parse(&["--grid-size", "fine"]).err(), Some(2));
+}

@@ -86,10 +86,35 @@ fn the_app_renders_pastel_voxels_on_a_lit_stage() {
     let dir = scratch_dir("render");
     let out = dir.join("stage.png");
     let Some(run) = screenshot(&out, 30) else { return };
+    assert_lit_model(&run, &out, 2_000);
+}
+
+/// A fine grid (0.04: about 190 cells along the apple's diagonal, tens of thousands of voxels) drawn by the
+/// instanced chunks, in the main pass and in the light's shadow map, at the low detail their size on screen asks for.
+#[test]
+fn a_fine_grid_renders_with_its_shadow() {
+    let dir = scratch_dir("render-fine");
+    let out = dir.join("fine.png");
+    let args = [
+        "--screenshot".as_ref(),
+        out.as_os_str(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "--grid-size".as_ref(),
+        "0.04".as_ref(),
+    ];
+    let Some(run) = run_app(&args) else { return };
+    assert_lit_model(&run, &out, 10_000);
+}
+
+/// The screenshot `out` of a successful `run`: at least `model_pixels` pixels of the model's colour, the
+/// background's gradient and the model's shadow on the floor.
+fn assert_lit_model(run: &std::process::Output, out: &Path, model_pixels: usize) {
     assert!(run.status.success(), "app failed: {}\n{}", run.status, String::from_utf8_lossy(&run.stderr));
-    let img = image::open(&out).expect("screenshot written").to_rgba8();
+    let img = image::open(out).expect("screenshot written").to_rgba8();
     assert_eq!((img.width(), img.height()), (1280, 720));
-    let probe: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("stage.png.json")).unwrap()).unwrap();
+    let probe_path = out.with_file_name(format!("{}.json", out.file_name().unwrap().to_string_lossy()));
+    let probe: serde_json::Value = serde_json::from_slice(&std::fs::read(probe_path).unwrap()).unwrap();
     let point = |key: &str| -> [f32; 2] {
         let v = &probe[key];
         [v[0].as_f64().unwrap_or_else(|| panic!("{key} not on screen: {probe}")) as f32, v[1].as_f64().unwrap() as f32]
@@ -108,7 +133,7 @@ fn the_app_renders_pastel_voxels_on_a_lit_stage() {
             dh < 0.04 && ps > s * 0.5 && pl > 0.15 && pl < 0.95
         })
         .count();
-    assert!(matching > 2_000, "only {matching} pixels of the model's hue {h:.3}");
+    assert!(matching > model_pixels, "only {matching} pixels of the model's hue {h:.3}");
 
     // The background is a gradient: pinker at the top, more lilac lower down.
     let top = sample(&img, point("background_top"));

@@ -1,0 +1,250 @@
+//! `cargo bench --bench frame -- render [SCENARIO…] [100k|1m]`: a whole frame's CPU cost with Bevy's renderer.
+//!
+//! Each case is the app's own plugins (`DefaultPlugins` without winit and without a window, the voxel material,
+//! the `LogicPlugin`) with the renderer on wgpu's no-op backend: GPU commands cost nothing, every CPU cost
+//! counts (extraction, batching, uploads, pipelined rendering as the app has it). One `Camera3d` renders into a
+//! 1280×720 image beside a shadow-casting `DirectionalLight`. Every case is stepped in turn with an `empty` app
+//! (the same plugins, no voxels), frame by frame, so the difference between the two is the voxels' share and
+//! not the machine's mood. Lines: `render <scenario> <N> voxels: median <X> ms/frame, p90 <Y> ms/frame, worst
+//! <W> ms, <T> triangles/frame` (triangles over the main and the shadow pass, as submitted).
+
+use std::time::Instant;
+
+use bevy::app::PluginsState;
+use bevy::camera::RenderTarget;
+use bevy::light::CascadeShadowConfigBuilder;
+use bevy::prelude::*;
+use bevy::render::RenderPlugin;
+use bevy::render::render_resource::TextureFormat;
+use bevy::render::renderer::{RenderAdapter, RenderAdapterInfo, RenderInstance, RenderQueue, WgpuWrapper};
+use bevy::render::settings::RenderCreation;
+use bevy::time::TimeUpdateStrategy;
+use bevy::window::ExitCondition;
+use bevy::winit::WinitPlugin;
+use std::sync::Arc;
+use voxel_art::instancing::VoxelPool;
+use voxel_art::model::{ModelLibrary, VoxelModelAsset};
+use voxel_art::settings::Style;
+use voxel_art::transition::ActiveTransition;
+use voxel_core::shapes::uv_sphere;
+use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
+
+/// Frames measured per case.
+const FRAMES: usize = 300;
+
+/// A renderer on wgpu's no-op backend: the adapter's features (minus the experimental ones and the
+/// adapter-specific texture format features the no-op adapter claims but Bevy would then query), default limits.
+fn noop_renderer() -> RenderCreation {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::NOOP,
+        backend_options: wgpu::BackendOptions { noop: wgpu::NoopBackendOptions { enable: true }, ..default() },
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter = bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+        .expect("no-op adapter");
+    let mut features = adapter.features();
+    features.remove(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+    features.remove(wgpu::Features::all_experimental_mask());
+    let (device, queue) = bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_features: features,
+        required_limits: wgpu::Limits::default(),
+        ..default()
+    }))
+    .expect("no-op device");
+    let info = adapter.get_info();
+    RenderCreation::manual(
+        device.into(),
+        RenderQueue(Arc::new(WgpuWrapper::new(queue))),
+        RenderAdapterInfo(WgpuWrapper::new(info)),
+        RenderAdapter(Arc::new(WgpuWrapper::new(adapter))),
+        RenderInstance(Arc::new(WgpuWrapper::new(instance))),
+    )
+}
+
+/// The app's plugins with the renderer on the no-op backend, a camera rendering into an image and the key
+/// light; `models` in its library (the first shown), in `style`.
+fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
+    let mut app = App::new();
+    let asset_plugin = voxel_art::assets::asset_plugin(&mut app);
+    app.add_plugins(
+        DefaultPlugins
+            .set(voxel_art::threads::task_pools())
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                close_when_requested: false,
+                ..default()
+            })
+            .set(RenderPlugin { render_creation: noop_renderer(), ..default() })
+            .set(asset_plugin)
+            .disable::<WinitPlugin>(),
+    );
+    let args = voxel_art::config::AppArgs { no_shipped: true, style: Some(style), ..Default::default() };
+    args.configure(&mut app);
+    app.add_plugins(voxel_art::instancing::render_plugin);
+    app.add_plugins(voxel_art::LogicPlugin);
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(voxel_art::schedule::FIXED_STEP));
+    app.add_systems(Startup, stage);
+    while app.plugins_state() == PluginsState::Adding {
+        bevy::tasks::tick_global_task_pools_on_main_thread();
+    }
+    app.finish();
+    app.cleanup();
+    app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().hollow = false;
+    app.update();
+    if !models.is_empty() {
+        let handles: Vec<_> = models
+            .into_iter()
+            .map(|m| app.world_mut().resource_mut::<Assets<VoxelModelAsset>>().add(VoxelModelAsset(m)))
+            .collect();
+        let mut library = app.world_mut().resource_mut::<ModelLibrary>();
+        library.entries =
+            handles.into_iter().enumerate().map(|(i, h)| super::entry(&format!("model {i}"), h)).collect();
+        library.current = 0;
+        for _ in 0..600 {
+            app.update();
+            if super::settled(&app) {
+                break;
+            }
+        }
+        assert!(super::settled(&app), "the model never settled");
+    }
+    app
+}
+
+/// The camera (rendering into an image, as the app's: MSAA 4×) and the shadow-casting key light.
+fn stage(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
+    let image = images.add(Image::new_target_texture(1280, 720, TextureFormat::Rgba8UnormSrgb, None));
+    commands.spawn((
+        Camera3d::default(),
+        RenderTarget::Image(image.into()),
+        Msaa::Sample4,
+        Transform::from_xyz(9.0, 6.0, 14.0).looking_at(Vec3::new(0.0, -0.6, 0.0), Vec3::Y),
+    ));
+    commands.spawn((
+        DirectionalLight { illuminance: 7_000.0, shadow_maps_enabled: true, ..default() },
+        CascadeShadowConfigBuilder { num_cascades: 1, maximum_distance: 60.0, ..default() }.build(),
+        Transform::from_xyz(3.0, 12.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+}
+
+/// A solid sphere `resolution` cells across (58: about 100k voxels; 126: about 1M).
+fn sphere(resolution: u32) -> voxel_core::VoxelModel {
+    let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 64), [0.9, 0.5, 0.6, 1.0]);
+    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(resolution), hollow: false, ..Default::default() })
+        .expect("voxelize")
+}
+
+/// A solid cube of about as many voxels as a sphere `resolution` cells across.
+fn cube(resolution: u32) -> voxel_core::VoxelModel {
+    let soup = TriangleSoup::from_mesh(&voxel_core::shapes::cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
+    let side = (resolution as f32 * (std::f32::consts::PI / 6.0).cbrt()).round() as u32;
+    voxelize(&soup, &VoxelizeOptions { grid: GridSize::Resolution(side), hollow: false, ..Default::default() })
+        .expect("voxelize")
+}
+
+/// Triangles a frame: every voxel that shows, once in the main pass and once in the shadow pass.
+fn triangles(app: &mut App) -> u64 {
+    voxel_art::instancing::triangles_per_frame(app.world_mut()) * 2
+}
+
+/// Milliseconds of `frames` updates of `case` and of `empty`, stepped in turn; `each` runs before every frame
+/// of the case (with the frame's number).
+fn interleaved(
+    case: &mut App,
+    empty: &mut App,
+    frames: usize,
+    mut each: impl FnMut(&mut App, usize),
+) -> (Vec<f64>, Vec<f64>, u64) {
+    let time = |app: &mut App| {
+        let t = Instant::now();
+        app.update();
+        t.elapsed().as_secs_f64() * 1e3
+    };
+    let (mut case_ms, mut empty_ms, mut most) = (Vec::new(), Vec::new(), 0);
+    for frame in 0..frames {
+        empty_ms.push(time(empty));
+        each(case, frame);
+        case_ms.push(time(case));
+        most = most.max(triangles(case));
+    }
+    (case_ms, empty_ms, most)
+}
+
+/// Prints a line: median, p90, worst, triangles.
+fn report(scenario: &str, voxels: usize, ms: &[f64], triangles: u64) {
+    let (median, p90) = super::median_p90(ms);
+    let worst = ms.iter().copied().fold(0.0, f64::max);
+    println!(
+        "render {scenario} {voxels} voxels: median {median:.2} ms/frame, p90 {p90:.2} ms/frame, worst {worst:.1} ms, \
+         {triangles} triangles/frame"
+    );
+}
+
+/// The voxels shown by `app`'s pool.
+fn shown(app: &App) -> usize {
+    app.world().resource::<VoxelPool>().visible
+}
+
+/// Whether the filter arguments after `render` (scenarios and sizes) ask for `word` (all when none is given
+/// of its kind).
+fn asked(word: &str, kind: &[&str]) -> bool {
+    let words: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-') && a != "render").collect();
+    let of_kind: Vec<&String> = words.iter().filter(|w| kind.contains(&w.as_str())).collect();
+    of_kind.is_empty() || of_kind.iter().any(|w| *w == word)
+}
+
+const SCENARIOS: [&str; 5] = ["static", "morph", "repel", "bubbles", "falling"];
+const SIZES: [&str; 2] = ["100k", "1m"];
+
+/// Runs the render cases asked for.
+pub fn run() {
+    println!("render: threads {}", bevy::tasks::available_parallelism());
+    for (size, resolution) in [("100k", 58), ("1m", 126)] {
+        if !asked(size, &SIZES) {
+            continue;
+        }
+        let model = sphere(resolution);
+        for scenario in SCENARIOS {
+            if !asked(scenario, &SCENARIOS) {
+                continue;
+            }
+            run_case(scenario, &model, resolution);
+        }
+    }
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    if let Some(peak) = status.lines().find(|l| l.starts_with("VmHWM")) {
+        println!("render: peak memory of this process: {}", peak.trim_start_matches("VmHWM:").trim());
+    }
+}
+
+fn run_case(scenario: &str, model: &voxel_core::VoxelModel, resolution: u32) {
+    let mut empty = render_app(Vec::new(), Style::RoundedBoxes);
+    let style = match scenario {
+        "bubbles" => Style::Bubbles,
+        "falling" => Style::Falling,
+        _ => Style::RoundedBoxes,
+    };
+    let models = if scenario == "morph" { vec![model.clone(), cube(resolution)] } else { vec![model.clone()] };
+    let mut case = render_app(models, style);
+    let voxels = shown(&case);
+    let (ms, empty_ms, tris) = match scenario {
+        // A morph every 60 frames (one second): the median is mid-morph, the worst the frame that starts one.
+        "morph" => interleaved(&mut case, &mut empty, FRAMES, |app, frame| {
+            if frame % 60 == 0 {
+                app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
+            }
+        }),
+        "repel" | "bubbles" => {
+            case.add_systems(First, super::circling_cursor);
+            interleaved(&mut case, &mut empty, FRAMES, |_, _| {})
+        }
+        _ => interleaved(&mut case, &mut empty, FRAMES, |_, _| {}),
+    };
+    report("empty", 0, &empty_ms, 0);
+    report(scenario, voxels, &ms, tris);
+    let running = case.world().resource::<ActiveTransition>().running.is_some();
+    if scenario == "morph" {
+        println!("  (a transition running at the end: {running})");
+    }
+}

@@ -1,0 +1,409 @@
+//! The voxels on the GPU: one storage buffer of [`GpuVoxel`]s (one per pool slot) drawn by a few chunk
+//! entities that share one mesh of [`VOXELS_PER_CHUNK`] boxes and the voxel material. Bevy sees a few hundred
+//! mesh entities at a million voxels, batched into one instanced draw per view (the main pass and the light's
+//! shadow pass), instead of a mesh entity per voxel.
+//!
+//! Each frame, after transform propagation, the voxels whose transform, colour or visibility changed are
+//! gathered (in parallel) into a CPU mirror of the buffer; extraction writes only the chunks that changed
+//! with `RenderQueue::write_buffer`. The plugin owns the buffer: a `ShaderBuffer` asset created at its size
+//! without data (so Bevy never uploads it whole), replaced by a bigger one when the pool outgrows it.
+
+use bevy::camera::visibility::NoFrustumCulling;
+use bevy::mesh::MeshTag;
+use bevy::prelude::*;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::renderer::RenderQueue;
+use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
+use bevy::transform::TransformSystems;
+use bevy::utils::Parallel;
+use bytemuck::{Pod, Zeroable};
+
+use super::material::ChunkLayout;
+use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, VoxelSlot, mesh::chunk_mesh};
+use crate::model::VoxelModelAsset;
+use crate::settings::VoxelSettings;
+
+/// Voxels (boxes) in one chunk's mesh.
+pub const VOXELS_PER_CHUNK: usize = 1024;
+
+/// The most voxels one storage binding holds (128 MiB of [`GpuVoxel`]s).
+pub const MAX_GPU_VOXELS: usize = (128 << 20) / size_of::<GpuVoxel>();
+
+/// One voxel as the vertex shaders read it (32 bytes). Voxels only ever turn about y (the model's spin), so
+/// the box's frame is its x axis in the xz plane (scale × (cos, −sin)), its height and its depth.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVoxel {
+    /// Centre (world space).
+    pub translation: [f32; 3],
+    /// sRGB RGBA8 (r | g << 8 | b << 16 | a << 24).
+    pub color: u32,
+    /// The box's x axis, x and z components (width × (cos, −sin) of its turn about y).
+    pub x_axis: [f32; 2],
+    /// Box height.
+    pub scale_y: f32,
+    /// Box depth.
+    pub scale_z: f32,
+}
+
+impl GpuVoxel {
+    /// A voxel placed by `global` (a turn about y and a scale), coloured `color`; a hidden one has no size.
+    pub fn new(global: &GlobalTransform, color: u32, shown: bool) -> Self {
+        let affine = global.affine();
+        let m = affine.matrix3;
+        let translation = affine.translation.into();
+        if !shown {
+            return Self { translation, color, ..Self::default() };
+        }
+        Self { translation, color, x_axis: [m.x_axis.x, m.x_axis.z], scale_y: m.y_axis.y, scale_z: m.z_axis.length() }
+    }
+
+    /// Whether it draws anything.
+    pub fn shows(&self) -> bool {
+        self.scale_y != 0.0
+    }
+}
+
+/// The CPU mirror of the voxel buffer and what changed in it this frame.
+#[derive(Resource, Debug, Default)]
+pub struct GpuVoxels {
+    /// The voxels by pool slot (as long as the buffer holds).
+    pub voxels: Vec<GpuVoxel>,
+    /// Voxels that show, per chunk (a chunk with none is not drawn).
+    shown: Vec<u32>,
+    /// Chunks changed this frame (each once), and a flag per chunk.
+    dirty: Vec<u32>,
+    dirty_flag: Vec<bool>,
+    /// The GPU buffer (`None` until the pool has a voxel).
+    pub buffer: Option<Handle<ShaderBuffer>>,
+    /// The buffer is new this frame: all of it is uploaded.
+    pub whole: bool,
+}
+
+impl GpuVoxels {
+    /// Ranges of voxels (start, end) to upload this frame, adjacent chunks merged.
+    pub fn dirty_ranges(&self) -> Vec<(usize, usize)> {
+        let mut chunks = self.dirty.clone();
+        chunks.sort_unstable();
+        let mut ranges: Vec<(usize, usize)> = Vec::new();
+        for c in chunks {
+            let (start, end) = (c as usize * VOXELS_PER_CHUNK, (c as usize + 1) * VOXELS_PER_CHUNK);
+            match ranges.last_mut() {
+                Some(last) if last.1 == start => last.1 = end,
+                _ => ranges.push((start, end)),
+            }
+        }
+        ranges
+    }
+
+    /// Whether chunk `c` has a voxel to draw.
+    pub fn chunk_shows(&self, c: usize) -> bool {
+        self.shown.get(c).is_some_and(|n| *n > 0)
+    }
+
+    /// Sets slot `slot` to `voxel`, keeping the chunk's count and dirty flag (a slot past the buffer's end, which
+    /// the pool's cap keeps from happening, is not drawn).
+    fn set(&mut self, slot: usize, voxel: GpuVoxel) {
+        let Some(old) = self.voxels.get_mut(slot).map(|v| std::mem::replace(v, voxel)) else { return };
+        if old == voxel {
+            return;
+        }
+        let c = slot / VOXELS_PER_CHUNK;
+        self.shown[c] = self.shown[c] + u32::from(voxel.shows()) - u32::from(old.shows());
+        if !self.dirty_flag[c] {
+            self.dirty_flag[c] = true;
+            self.dirty.push(c as u32);
+        }
+    }
+
+    /// Forgets last frame's changes.
+    fn clear_changes(&mut self) {
+        for c in self.dirty.drain(..) {
+            self.dirty_flag[c as usize] = false;
+        }
+        self.whole = false;
+    }
+
+    /// Makes room for `slots` voxels: a bigger buffer (whole chunks, doubling) when needed; returns whether the
+    /// buffer was replaced.
+    fn reserve(&mut self, slots: usize) -> bool {
+        if slots <= self.voxels.len() && self.buffer.is_some() {
+            return false;
+        }
+        let chunks = slots.div_ceil(VOXELS_PER_CHUNK).max(1).next_power_of_two();
+        let len = (chunks * VOXELS_PER_CHUNK).min(MAX_GPU_VOXELS.next_multiple_of(VOXELS_PER_CHUNK));
+        self.voxels.resize(len, GpuVoxel::default());
+        self.shown.resize(len / VOXELS_PER_CHUNK, 0);
+        self.dirty_flag.resize(len / VOXELS_PER_CHUNK, false);
+        self.whole = true;
+        true
+    }
+}
+
+/// A chunk entity: it draws voxels `index × VOXELS_PER_CHUNK ..` (its `MeshTag` says which to the shader).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VoxelChunk(pub u32);
+
+/// The voxels whose look changed since the last gather (or which are new).
+type ChangedVoxels<'w, 's> = Query<
+    'w,
+    's,
+    (&'static VoxelSlot, &'static GlobalTransform, &'static MeshTag, &'static Visibility),
+    (Without<VoxelCloud>, Or<(Changed<GlobalTransform>, Changed<MeshTag>, Changed<Visibility>)>),
+>;
+
+/// Copies the voxels that changed into the mirror (found in parallel, written in one pass), growing the
+/// buffer with the pool.
+fn gather(
+    mut gpu: ResMut<GpuVoxels>,
+    pool: Res<VoxelPool>,
+    assets: Res<VoxelAssets>,
+    voxels: ChangedVoxels,
+    mut found: Local<Parallel<Vec<(u32, GpuVoxel)>>>,
+    mut buffers: ResMut<Assets<ShaderBuffer>>,
+    mut materials: ResMut<Assets<VoxelMaterial>>,
+) {
+    gpu.clear_changes();
+    if gpu.reserve(pool.slots.len()) {
+        let size = gpu.voxels.len() * size_of::<GpuVoxel>();
+        let buffer = buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
+        if let Some(old) = gpu.buffer.replace(buffer.clone()) {
+            buffers.remove(&old);
+        }
+        if let Some(mut material) = materials.get_mut(&assets.material) {
+            material.extension.voxels = buffer;
+        }
+    }
+    let lists: &Parallel<_> = &found;
+    voxels.par_iter().for_each(|(slot, global, tag, visibility)| {
+        let voxel = GpuVoxel::new(global, tag.0, *visibility != Visibility::Hidden);
+        lists.borrow_local_mut().push((slot.0, voxel));
+    });
+    for list in found.iter_mut() {
+        for (slot, voxel) in list.drain(..) {
+            gpu.set(slot as usize, voxel);
+        }
+    }
+}
+
+/// Voxels narrower than this many pixels on screen are drawn with the low detail shape.
+pub const LOW_DETAIL_BELOW_PIXELS: f32 = 8.0;
+
+/// Which shape the chunks draw: the style's detailed one, or the low detail one when voxels cover a few pixels.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Detail {
+    /// The low detail shape.
+    pub low: bool,
+}
+
+/// The `MeshTag` of chunk `index` (bit 31: it draws the low detail mesh).
+pub fn chunk_tag(index: u32, low: bool) -> u32 {
+    index | u32::from(low) << 31
+}
+
+/// The width in pixels of a box `size` wide at `distance` from a perspective camera with vertical field of view
+/// `fov` (radians) over `height` pixels.
+pub fn pixels_across(size: f32, distance: f32, fov: f32, height: f32) -> f32 {
+    size * height / (2.0 * distance.max(1e-3) * (fov / 2.0).tan())
+}
+
+/// Chooses the detail from the width on screen of the model's voxels at the model's centre, seen by the first
+/// active perspective camera (the lowest order).
+fn choose_detail(
+    pool: Res<VoxelPool>,
+    models: Res<Assets<VoxelModelAsset>>,
+    settings: Res<VoxelSettings>,
+    cameras: Query<(&Camera, &GlobalTransform, &Projection)>,
+    cloud: Query<&GlobalTransform, With<VoxelCloud>>,
+    mut detail: ResMut<Detail>,
+) {
+    let camera = cameras.iter().filter(|(c, ..)| c.is_active).min_by_key(|(c, ..)| c.order);
+    let Some((camera, at, Projection::Perspective(perspective))) = camera else { return };
+    let Some(height) = camera.logical_viewport_size().map(|s| s.y) else { return };
+    let model = pool.shown.and_then(|id| models.get(id));
+    let cell = model.map_or(super::PLACEHOLDER_CELL, |m| m.spec.cell[0].min(m.spec.cell[2]));
+    let centre = cloud.single().map_or(Vec3::ZERO, GlobalTransform::translation);
+    let across = pixels_across(cell * settings.box_size, at.translation().distance(centre), perspective.fov, height);
+    detail.set_if_neq(Detail { low: across < LOW_DETAIL_BELOW_PIXELS });
+}
+
+/// Keeps one chunk entity per chunk of the pool, drawn while it has a voxel that shows, with the chosen detail.
+fn fit_chunks(
+    mut commands: Commands,
+    gpu: Res<GpuVoxels>,
+    pool: Res<VoxelPool>,
+    assets: Res<VoxelAssets>,
+    detail: Res<Detail>,
+    mut chunks: Query<(&VoxelChunk, &mut Visibility, &mut Mesh3d, &mut MeshTag)>,
+    mut count: Local<usize>,
+) {
+    let mesh = if detail.low { &assets.low_chunk_mesh } else { &assets.chunk_mesh };
+    let needed = pool.slots.len().div_ceil(VOXELS_PER_CHUNK);
+    for c in *count..needed {
+        commands.spawn((
+            Name::new("voxel chunk"),
+            VoxelChunk(c as u32),
+            Mesh3d(mesh.clone()),
+            MeshMaterial3d(assets.material.clone()),
+            MeshTag(chunk_tag(c as u32, detail.low)),
+            Transform::default(),
+            // The boxes sit wherever their voxels are: the chunk mesh's own bounds say nothing about that.
+            NoFrustumCulling,
+            if gpu.chunk_shows(c) { Visibility::Inherited } else { Visibility::Hidden },
+        ));
+    }
+    *count = (*count).max(needed);
+    for (chunk, mut visibility, mut chunk_mesh, mut tag) in &mut chunks {
+        let shows = gpu.chunk_shows(chunk.0 as usize);
+        visibility.set_if_neq(if shows { Visibility::Inherited } else { Visibility::Hidden });
+        if chunk_mesh.0 != *mesh {
+            chunk_mesh.0 = mesh.clone();
+            tag.0 = chunk_tag(chunk.0, detail.low);
+        }
+    }
+}
+
+/// Rebuilds the chunk meshes from the voxel shapes whenever a style changes them, and tells the material their
+/// layout.
+fn rebuild_chunk_meshes(
+    mut events: MessageReader<AssetEvent<Mesh>>,
+    assets: Res<VoxelAssets>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<VoxelMaterial>>,
+) {
+    let modified: Vec<AssetId<Mesh>> =
+        events.read().filter_map(|e| if let AssetEvent::Modified { id } = e { Some(*id) } else { None }).collect();
+    let pairs = [(&assets.mesh, &assets.chunk_mesh), (&assets.low_mesh, &assets.low_chunk_mesh)];
+    let mut rebuilt = false;
+    for (shape, chunk) in pairs {
+        if let Some(voxel) = meshes.get(shape).filter(|_| modified.contains(&shape.id())) {
+            let mesh = chunk_mesh(voxel);
+            let _ = meshes.insert(chunk, mesh);
+            rebuilt = true;
+        }
+    }
+    let (Some(shape), Some(low)) = (meshes.get(&assets.mesh), meshes.get(&assets.low_mesh)) else { return };
+    let layout = ChunkLayout::of(shape, low);
+    if let Some(mut material) = materials.get_mut(&assets.material).filter(|m| rebuilt && m.extension.layout != layout)
+    {
+        material.extension.layout = layout;
+    }
+}
+
+/// Render world: a whole buffer's contents waiting for its GPU buffer to exist.
+#[derive(Resource, Default)]
+struct PendingUpload(Option<(AssetId<ShaderBuffer>, Vec<u8>)>);
+
+/// Extraction: writes the chunks that changed into the GPU buffer (all of it when the buffer is new).
+fn upload(
+    gpu: Extract<Res<GpuVoxels>>,
+    buffers: Res<RenderAssets<GpuShaderBuffer>>,
+    queue: Res<RenderQueue>,
+    mut pending: ResMut<PendingUpload>,
+) {
+    let Some(handle) = &gpu.buffer else { return };
+    let target = buffers.get(handle.id()).filter(|_| !gpu.whole && pending.0.is_none());
+    let Some(target) = target else {
+        pending.0 = Some((handle.id(), bytemuck::cast_slice(&gpu.voxels).to_vec()));
+        return;
+    };
+    for (start, end) in gpu.dirty_ranges() {
+        let end = end.min(gpu.voxels.len());
+        let offset = (start * size_of::<GpuVoxel>()) as u64;
+        queue.write_buffer(&target.buffer, offset, bytemuck::cast_slice(&gpu.voxels[start..end]));
+    }
+}
+
+/// Writes a new buffer's contents once Bevy has made it.
+fn upload_pending(
+    buffers: Res<RenderAssets<GpuShaderBuffer>>,
+    queue: Res<RenderQueue>,
+    mut pending: ResMut<PendingUpload>,
+) {
+    let Some((id, _)) = &pending.0 else { return };
+    let Some(target) = buffers.get(*id) else { return };
+    if let Some((_, bytes)) = pending.0.take() {
+        queue.write_buffer(&target.buffer, 0, &bytes);
+    }
+}
+
+/// Triangles the voxels submit to one pass a frame: every chunk drawn, whole (its boxes that hide included).
+pub fn triangles_per_frame(world: &mut World) -> u64 {
+    let assets = world.resource::<VoxelAssets>();
+    let shape = if world.resource::<Detail>().low { assets.low_mesh.id() } else { assets.mesh.id() };
+    let per_voxel = world.resource::<Assets<Mesh>>().get(shape).and_then(|m| m.indices()).map_or(0, |i| i.len() / 3);
+    let mut chunks = world.query::<(&VoxelChunk, &Visibility)>();
+    let drawn = chunks.iter(world).filter(|(_, v)| **v != Visibility::Hidden).count();
+    (drawn * VOXELS_PER_CHUNK * per_voxel) as u64
+}
+
+/// The render side of the instancing plugin.
+pub(super) fn plugin(app: &mut App) {
+    app.init_resource::<GpuVoxels>();
+    app.init_resource::<Detail>();
+    app.add_systems(
+        PostUpdate,
+        (rebuild_chunk_meshes, gather, choose_detail, fit_chunks).chain().after(TransformSystems::Propagate),
+    );
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
+    render_app.init_resource::<PendingUpload>();
+    render_app.add_systems(ExtractSchedule, upload);
+    render_app.add_systems(Render, upload_pending.in_set(RenderSystems::PrepareResources));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::instancing::voxel_transform;
+
+    #[test]
+    fn a_voxel_keeps_its_place_turn_size_and_colour_in_32_bytes() {
+        assert_eq!(size_of::<GpuVoxel>(), 32);
+        let turn = Quat::from_rotation_y(0.7);
+        let global = GlobalTransform::from(voxel_transform(turn, Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.24, 0.2)));
+        let v = GpuVoxel::new(&global, 0xff11_2233, true);
+        assert_eq!(v.color, 0xff11_2233);
+        assert!(Vec3::from(v.translation).distance(turn * Vec3::new(1.0, 2.0, 3.0)) < 1e-6);
+        // The x axis is the width turned: (cos, −sin) × 0.2; the height and depth as given.
+        assert!((v.x_axis[0] - 0.2 * 0.7f32.cos()).abs() < 1e-6 && (v.x_axis[1] + 0.2 * 0.7f32.sin()).abs() < 1e-6);
+        assert!((v.scale_y - 0.24).abs() < 1e-6 && (v.scale_z - 0.2).abs() < 1e-6);
+        assert!(v.shows());
+        let hidden = GpuVoxel::new(&global, 0xff11_2233, false);
+        assert!(!hidden.shows() && hidden.x_axis == [0.0; 2] && hidden.scale_z == 0.0);
+    }
+
+    #[test]
+    fn only_changed_chunks_are_uploaded_and_empty_chunks_are_not_drawn() {
+        let mut gpu = GpuVoxels::default();
+        assert!(gpu.reserve(3 * VOXELS_PER_CHUNK + 1));
+        assert_eq!(gpu.voxels.len(), 4 * VOXELS_PER_CHUNK, "whole chunks, doubling");
+        let shown = GpuVoxel { scale_y: 1.0, ..GpuVoxel::default() };
+        gpu.clear_changes();
+        gpu.set(5, shown);
+        gpu.set(VOXELS_PER_CHUNK + 7, shown);
+        gpu.set(3 * VOXELS_PER_CHUNK, shown);
+        // Chunks 0 and 1 merge into one range; chunk 3 is another.
+        assert_eq!(gpu.dirty_ranges(), vec![(0, 2 * VOXELS_PER_CHUNK), (3 * VOXELS_PER_CHUNK, 4 * VOXELS_PER_CHUNK)]);
+        assert!(gpu.chunk_shows(0) && gpu.chunk_shows(1) && !gpu.chunk_shows(2) && gpu.chunk_shows(3));
+        gpu.clear_changes();
+        // The same value again changes nothing; hiding the last voxel of a chunk stops drawing it.
+        gpu.set(5, shown);
+        assert!(gpu.dirty_ranges().is_empty());
+        gpu.set(VOXELS_PER_CHUNK + 7, GpuVoxel::default());
+        assert_eq!(gpu.dirty_ranges(), vec![(VOXELS_PER_CHUNK, 2 * VOXELS_PER_CHUNK)]);
+        assert!(!gpu.chunk_shows(1));
+        // A slot past the buffer is ignored.
+        gpu.set(gpu.voxels.len(), shown);
+    }
+
+    #[test]
+    fn the_detail_follows_the_size_on_screen() {
+        // A 0.24 cell 17 units away under a 45° field of view over 720 pixels: about 12 pixels; 0.03: 1.5.
+        let fov = std::f32::consts::FRAC_PI_4;
+        assert!((pixels_across(0.24, 17.0, fov, 720.0) - 12.3).abs() < 0.1);
+        assert!(pixels_across(0.03, 17.0, fov, 720.0) < LOW_DETAIL_BELOW_PIXELS);
+        assert_eq!(chunk_tag(5, false), 5);
+        assert_eq!(chunk_tag(5, true), 5 | 1 << 31);
+    }
+}
