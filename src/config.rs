@@ -1,5 +1,5 @@
 //! The command line: `voxel-art [MODEL|FOLDER…] [--style S] [--export-dir DIR] [--screenshot out.png --frames
-//! N]` opens the app, `voxel-art voxelize FILE…` runs the core's headless voxelizer ([`Cli`]). The app's
+//! N | --record out.gif --seconds S]` opens the app, `voxel-art voxelize FILE…` runs the core's headless voxelizer ([`Cli`]). The app's
 //! arguments become its starting configuration in [`AppArgs::configure`], the one place that reads them: it
 //! inserts the starting resources the plugins read (no system sees the raw command line).
 
@@ -12,6 +12,7 @@ use crate::animation::AnimationStart;
 use crate::export::ExportDir;
 use crate::input::PointerMode;
 use crate::library::LibrarySetup;
+use crate::record::{DEFAULT_SECONDS, HeadlessRecord, RecordPlugin, RecordSize};
 use crate::screenshot::ScreenshotPlugin;
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
@@ -67,11 +68,21 @@ pub struct AppArgs {
     /// Start with the model at this index of the list (0-based).
     #[arg(long, default_value_t = 0)]
     pub start: usize,
-    /// With --screenshot: once the first model has settled, switch to this model (0-based) and count
-    /// --frames from the switch (a frame of the morph).
+    /// With --screenshot or --record: once the first model has settled, switch to this model (0-based) and
+    /// count --frames (or record) from the switch: the morph.
     #[arg(long)]
     pub then: Option<usize>,
-    /// With --screenshot: let the pointer (where the window opened: the centre under Xvfb) repel voxels and
+    /// Record the stage (not the panel or tiles) as an animated GIF once the first model has settled (30
+    /// frames a second, time stepping 1/60 s a frame), write it here and exit. In the window, Ctrl+R records.
+    #[arg(long, value_name = "OUT.gif", conflicts_with = "screenshot")]
+    pub record: Option<PathBuf>,
+    /// With --record: seconds to record [default: 4].
+    #[arg(long, value_name = "S", requires = "record", value_parser = seconds)]
+    pub seconds: Option<f32>,
+    /// The size of recorded GIFs (--record and Ctrl+R) [default: 480x270].
+    #[arg(long, value_name = "WxH")]
+    pub record_size: Option<RecordSize>,
+    /// With --screenshot or --record: let the pointer (where the window opened: the centre under Xvfb) repel voxels and
     /// burst bubbles; without it a screenshot ignores the pointer.
     #[arg(long)]
     pub repel: bool,
@@ -120,10 +131,11 @@ impl AppArgs {
         });
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
         app.insert_state(self.style.unwrap_or_default());
-        app.insert_resource(match (&self.screenshot, self.repel) {
-            (Some(_), true) => PointerMode::Always,
-            (Some(_), false) => PointerMode::Never,
-            (None, _) => PointerMode::AfterMove,
+        let headless = self.screenshot.is_some() || self.record.is_some();
+        app.insert_resource(match (headless, self.repel) {
+            (true, true) => PointerMode::Always,
+            (true, false) => PointerMode::Never,
+            (false, _) => PointerMode::AfterMove,
         });
         let transition = TransitionSettings::default();
         app.insert_resource(TransitionSettings {
@@ -140,4 +152,22 @@ impl AppArgs {
         let seeks = self.anim_time.iter().skip(1).copied().collect();
         Some(ScreenshotPlugin { path, frames: self.frames, then: self.then, seeks })
     }
+
+    /// The recorder: Ctrl+R in the window, or the `--record` run.
+    pub(crate) fn record_plugin(&self) -> RecordPlugin {
+        let headless = self.record.clone().map(|path| HeadlessRecord {
+            path,
+            seconds: self.seconds.unwrap_or(DEFAULT_SECONDS),
+            then: self.then,
+        });
+        RecordPlugin { size: self.record_size.unwrap_or_default(), headless }
+    }
+}
+
+/// `--seconds`: a positive number of seconds, at most ten minutes.
+fn seconds(s: &str) -> Result<f32, String> {
+    s.parse::<f32>()
+        .ok()
+        .filter(|v| *v > 0.0 && *v <= 600.0)
+        .ok_or_else(|| format!("expected seconds between 0 and 600, got {s}"))
 }

@@ -1,6 +1,6 @@
 //! Keys and clicks: ←/→/Space cycle models, 1–9 pick one, S cycles styles, Ctrl+S exports the shown model, F
-//! drops/reassembles (falling style), R toggles mouse repel, P plays/pauses an animated model, H toggles the
-//! panel, Esc quits; a short click on
+//! drops/reassembles (falling style), R toggles mouse repel, Ctrl+R starts/stops recording a GIF, P
+//! plays/pauses an animated model, H toggles the panel, Esc quits; a short click on
 //! the stage goes to the next model, while press-and-hold (or a drag) orbits.
 
 use bevy::input::mouse::MouseButton;
@@ -86,6 +86,10 @@ pub struct CursorRay(pub Option<Ray3d>);
 #[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ToggleFall;
 
+/// Ctrl+R (or the panel's button): start recording the stage as a GIF, or stop (the record plugin acts on it).
+#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ToggleRecord;
+
 /// A click on the stage (a short press and release without dragging), in window coordinates.
 #[derive(Message, Debug, Clone, Copy, PartialEq)]
 pub struct StageClick(pub Vec2);
@@ -100,9 +104,11 @@ fn keys(
     mut next_style: ResMut<NextState<Style>>,
     mut fall: MessageWriter<ToggleFall>,
     mut export: MessageWriter<ExportRequest>,
+    mut record: MessageWriter<ToggleRecord>,
     mut animation: MessageWriter<AnimationRequest>,
     mut exit: MessageWriter<AppExit>,
 ) {
+    let ctrl = keys.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight]);
     if keys.just_pressed(KeyCode::ArrowRight) || keys.just_pressed(KeyCode::Space) {
         requests.write(LibraryRequest::Next);
     }
@@ -129,7 +135,7 @@ fn keys(
         panel.0 = !panel.0;
     }
     if keys.just_pressed(KeyCode::KeyS) {
-        if keys.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight]) {
+        if ctrl {
             export.write(ExportRequest);
         } else {
             next_style.set(style.get().next());
@@ -142,7 +148,11 @@ fn keys(
         animation.write(AnimationRequest::TogglePlay);
     }
     if keys.just_pressed(KeyCode::KeyR) {
-        repel.enabled = !repel.enabled;
+        if ctrl {
+            record.write(ToggleRecord);
+        } else {
+            repel.enabled = !repel.enabled;
+        }
     }
     if keys.just_pressed(KeyCode::Escape) {
         exit.write(AppExit::Success);
@@ -210,5 +220,6 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<StagePointer>();
     app.add_message::<StageClick>();
     app.add_message::<ToggleFall>();
+    app.add_message::<ToggleRecord>();
     app.add_systems(Update, (track_pointer, keys, clicks, click_to_next).chain().in_set(AppSystems::Input));
 }

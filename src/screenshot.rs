@@ -1,7 +1,7 @@
 //! `--screenshot out.png --frames N [--then M]`: once the first model has settled, run N more frames (with
 //! `--then`, switch to model M first: a frame of the morph), save the window to a PNG and exit (status 0). It
-//! exits with status 1, saying why, when no model can be shown (every file failed, or none settles within
-//! `MAX_WAIT_FRAMES`), when `--then` names no model of the list, and when the PNG cannot be written. With
+//! exits with status 1, saying why, when the [`Cue`] fails (no model can be shown, `--then` names no model of
+//! the list) and when the PNG cannot be written. With
 //! several `--anim-time`s, each capture is followed by a jump of the animation to the next time and N more
 //! frames, and the PNGs are numbered (`out-0.png`, …). Next to
 //! the PNG, `out.png.json`
@@ -15,16 +15,12 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 
 use crate::animation::AnimationRequest;
 use crate::camera::MainCamera;
+use crate::cue::{Cue, CueParams, CueState};
 use crate::instancing::VoxelPool;
-use crate::library::LibraryRequest;
-use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::model::VoxelModelAsset;
 use crate::schedule::AppSystems;
 use crate::settings::VoxelSettings;
 use crate::stage::{Floor, KeyLight};
-use crate::transition::{TransitionFinished, TransitionStarted};
-
-/// Frames allowed for the first model to appear before giving up.
-const MAX_WAIT_FRAMES: u32 = 3_000;
 
 /// `--screenshot`: what to capture and when.
 #[derive(Resource, Clone, Debug)]
@@ -54,10 +50,7 @@ impl ScreenshotPlugin {
 /// How far the capture has got.
 #[derive(Default)]
 struct Progress {
-    waited: u32,
-    settled: bool,
-    switched: bool,
-    counting: bool,
+    cue: Cue,
     frames: u32,
     requested: bool,
     shot: usize,
@@ -148,8 +141,8 @@ fn sidecar_path(png: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// Waits for the first model to settle (and, with `then`, for the morph to the next to begin), counts the
-/// frames, then writes the probe and captures the window.
+/// Waits for the cue (the first model settled, or with `then` the morph begun), counts the frames, then writes
+/// the probe and captures the window.
 fn drive(
     mut commands: Commands,
     request: Res<ScreenshotPlugin>,
@@ -160,10 +153,7 @@ fn drive(
     light: Query<&GlobalTransform, With<KeyLight>>,
     floor: Query<&GlobalTransform, With<Floor>>,
     window: Query<&Window>,
-    mut started: MessageReader<TransitionStarted>,
-    mut finished: MessageReader<TransitionFinished>,
-    library: Res<ModelLibrary>,
-    mut requests: MessageWriter<LibraryRequest>,
+    mut cue: CueParams,
     mut seek: MessageWriter<AnimationRequest>,
     mut progress: Local<Progress>,
     mut exit: MessageWriter<AppExit>,
@@ -171,36 +161,15 @@ fn drive(
     if progress.requested {
         return;
     }
-    if let Some(reason) = cannot_show(&library, request.then) {
-        error!("no screenshot: {reason}");
-        exit.write(AppExit::error());
-        progress.requested = true;
-        return;
-    }
-    let morph_began = started.read().count() > 0;
-    progress.settled |= finished.read().count() > 0;
-    if !progress.counting {
-        // Wait for the first model to settle; with --then, switch and wait for the morph to begin.
-        let ready = match request.then {
-            None => progress.settled,
-            Some(next) if !progress.switched => {
-                if progress.settled {
-                    requests.write(LibraryRequest::Select(next));
-                    progress.switched = true;
-                }
-                false
-            }
-            Some(_) => morph_began,
-        };
-        if !ready {
-            progress.waited += 1;
-            if progress.waited > MAX_WAIT_FRAMES {
-                error!("no model was shown after {MAX_WAIT_FRAMES} frames; no screenshot taken");
-                exit.write(AppExit::error());
-            }
+    match progress.cue.poll(&mut cue, request.then) {
+        CueState::Waiting => return,
+        CueState::Ready => {}
+        CueState::Failed(reason) => {
+            error!("no screenshot: {reason}");
+            exit.write(AppExit::error());
+            progress.requested = true;
             return;
         }
-        progress.counting = true;
     }
     progress.frames += 1;
     if progress.frames < request.frames {
@@ -255,30 +224,6 @@ fn drive(
             }
         },
     );
-}
-
-/// Why no screenshot can be taken, if it cannot: `then` names no model of the list, or every model failed.
-fn cannot_show(library: &ModelLibrary, then: Option<usize>) -> Option<String> {
-    let n = library.entries.len();
-    if let Some(then) = then.filter(|&t| t >= n) {
-        return Some(format!("--then {then}: the list has {n} models (0 to {})", n.saturating_sub(1)));
-    }
-    if library.entries.iter().all(|e| matches!(e.status, ModelStatus::Failed(_))) {
-        let reasons: Vec<String> = library
-            .entries
-            .iter()
-            .filter_map(|e| match &e.status {
-                ModelStatus::Failed(reason) => Some(format!("{}: {reason}", e.path.display())),
-                _ => None,
-            })
-            .collect();
-        return Some(if reasons.is_empty() {
-            "no models to show".to_owned()
-        } else {
-            format!("no model could be shown ({})", reasons.join("; "))
-        });
-    }
-    None
 }
 
 impl Plugin for ScreenshotPlugin {

@@ -1,17 +1,24 @@
 //! The side panel (egui): models, style, parameters, stats, progress and the last error.
 
+use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use voxel_core::FillMode;
+use voxel_core::palette::{ColorStage, FIXED_NAMES, Palette};
 
 use crate::animation::AnimationRequest;
 use crate::export::{ExportRequest, ExportStatus};
-use crate::input::PointerOverUi;
+use crate::input::{PointerOverUi, ToggleRecord};
 use crate::instancing::{MAX_DRAWN, VoxelPool};
 use crate::library::LibraryRequest;
-use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
-use crate::settings::{PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
+use crate::model::{ModelEntry, ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
+use crate::palette::PaletteFiles;
+use crate::record::RecordStatus;
+use crate::settings::{ColorSettings, PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
+
+/// The colour limit slider's top (the .vox export holds 255 colours).
+const MAX_COLORS_SLIDER: usize = 255;
 
 fn status_mark(status: &ModelStatus) -> &'static str {
     match status {
@@ -22,20 +29,36 @@ fn status_mark(status: &ModelStatus) -> &'static str {
     }
 }
 
+/// The colour of a failure.
+const RED: egui::Color32 = egui::Color32::from_rgb(200, 60, 60);
+/// The colour of a warning.
+const AMBER: egui::Color32 = egui::Color32::from_rgb(190, 120, 0);
+
+/// A model's line in the list: its name and state; red when it failed, amber with a ⚠ when part of the file is
+/// not shown; and the hover text saying why.
+fn entry_label(entry: &ModelEntry) -> (String, Option<egui::Color32>, Option<&str>) {
+    let label = format!("{}{}", entry.name, status_mark(&entry.status));
+    match (&entry.status, &entry.warning) {
+        (ModelStatus::Failed(reason), _) => (label, Some(RED), Some(reason)),
+        (_, Some(warning)) => (format!("{label}  ⚠"), Some(AMBER), Some(warning)),
+        (_, None) => (label, None, None),
+    }
+}
+
 fn model_list(ui: &mut egui::Ui, library: &ModelLibrary, requests: &mut MessageWriter<LibraryRequest>) {
     ui.heading("Models");
     for (i, entry) in library.entries.iter().enumerate() {
         let key = if i < 9 { format!("{} ", i + 1) } else { "   ".into() };
-        let text = egui::RichText::new(format!("{key}{}{}", entry.name, status_mark(&entry.status)));
-        let text = if matches!(entry.status, ModelStatus::Failed(_)) {
-            text.color(egui::Color32::from_rgb(200, 60, 60))
-        } else {
-            text
+        let (label, colour, hover) = entry_label(entry);
+        let text = egui::RichText::new(format!("{key}{label}"));
+        let text = match colour {
+            Some(c) => text.color(c),
+            None => text,
         };
         let response = ui.selectable_label(i == library.current, text);
-        let response = match &entry.status {
-            ModelStatus::Failed(reason) => response.on_hover_text(reason),
-            _ => response,
+        let response = match hover {
+            Some(reason) => response.on_hover_text(reason),
+            None => response,
         };
         if response.clicked() {
             requests.write(LibraryRequest::Select(i));
@@ -65,7 +88,6 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
         ui.selectable_value(&mut settings.fill, FillMode::None, "surface");
     });
     ui.checkbox(&mut settings.hollow, "hollow (only visible voxels)");
-    ui.checkbox(&mut settings.pastel, "pastel colours");
     ui.checkbox(&mut repel.enabled, "mouse repel (R)");
     ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.radius, 0.2..=4.0).text("repel radius"));
     ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.strength, 0.0..=2.0).text("repel strength"));
@@ -73,6 +95,47 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
         ui.label("F: drop / reassemble");
     }
     grid.dragged()
+}
+
+/// The panel's name of a palette: a built-in's name, a file's name without its folder.
+fn palette_label(palette: &Palette) -> String {
+    match palette {
+        Palette::Original => "original".into(),
+        Palette::Pastel => "pastel".into(),
+        Palette::Fixed { name, .. } => {
+            std::path::Path::new(name).file_name().map_or_else(|| name.clone(), |f| f.to_string_lossy().into_owned())
+        }
+    }
+}
+
+/// The colour stage: the palette (built-ins and files read), the colour limit (0: off) and dithering, and
+/// the last palette file's error.
+fn colors(ui: &mut egui::Ui, stage: &mut ColorStage, files: &PaletteFiles) {
+    ui.heading("Colours");
+    let builtins = [Palette::Original, Palette::Pastel]
+        .into_iter()
+        .chain(FIXED_NAMES.iter().filter_map(|name| Palette::from_arg(name).ok()));
+    egui::ComboBox::from_label("palette").selected_text(palette_label(&stage.palette)).show_ui(ui, |ui| {
+        for choice in builtins.chain(files.palettes.iter().cloned()) {
+            let label = palette_label(&choice);
+            ui.selectable_value(&mut stage.palette, choice, label);
+        }
+    });
+    let mut limit = stage.max_colors.unwrap_or(0);
+    let slider = egui::Slider::new(&mut limit, 0..=MAX_COLORS_SLIDER)
+        .text("colors")
+        .logarithmic(true)
+        .custom_formatter(|n, _| if n < 1.0 { "off".into() } else { format!("{n:.0}") });
+    ui.add(slider);
+    stage.max_colors = (limit > 0).then_some(limit);
+    ui.add_enabled(
+        matches!(stage.palette, Palette::Fixed { .. }),
+        egui::Checkbox::new(&mut stage.dither, "dither (fixed palettes)"),
+    );
+    ui.label(egui::RichText::new("Drop a .hex, .png or .vox palette on the window to use it.").small());
+    if let Some(error) = &files.error {
+        ui.colored_label(egui::Color32::from_rgb(200, 60, 60), error);
+    }
 }
 
 /// The current model's clips (pick one), play / pause, speed and where the clip is; absent for a static model.
@@ -137,9 +200,12 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
             });
         }
         ModelStatus::Failed(reason) => {
-            ui.colored_label(egui::Color32::from_rgb(200, 60, 60), reason);
+            ui.colored_label(RED, reason);
         }
         ModelStatus::Ready => {}
+    }
+    if let Some(warning) = &entry.warning {
+        ui.colored_label(AMBER, egui::RichText::new(format!("⚠ {warning}")).small());
     }
     if let Some(model) = entry.shown_handle().and_then(|h| models.get(h)) {
         let s = model.stats;
@@ -157,18 +223,45 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));
 }
 
-/// The Export button (Ctrl+S) and what the last export did.
-fn export_button(ui: &mut egui::Ui, status: &ExportStatus, export: &mut MessageWriter<ExportRequest>) {
-    if ui.add_enabled(*status != ExportStatus::Writing, egui::Button::new("Export (Ctrl+S)")).clicked() {
-        export.write(ExportRequest);
-    }
-    if let Some(message) = status.message() {
+/// What the panel's Export and Record buttons read and send.
+#[derive(SystemParam)]
+struct Outputs<'w> {
+    export_status: Res<'w, ExportStatus>,
+    export: MessageWriter<'w, ExportRequest>,
+    record_status: Res<'w, RecordStatus>,
+    record: MessageWriter<'w, ToggleRecord>,
+}
+
+/// A small status line under a button, red when `failed`.
+fn status_line(ui: &mut egui::Ui, message: Option<String>, failed: bool) {
+    if let Some(message) = message {
         let text = egui::RichText::new(message).small();
-        match status {
-            ExportStatus::Failed(_) => ui.colored_label(egui::Color32::from_rgb(200, 60, 60), text),
-            _ => ui.label(text),
-        };
+        if failed {
+            ui.colored_label(RED, text);
+        } else {
+            ui.label(text);
+        }
     }
+}
+
+/// The Export button (Ctrl+S), the Record button (Ctrl+R) and what the last export and recording did.
+fn output_buttons(ui: &mut egui::Ui, outputs: &mut Outputs) {
+    let exporting = *outputs.export_status == ExportStatus::Writing;
+    if ui.add_enabled(!exporting, egui::Button::new("Export (Ctrl+S)")).clicked() {
+        outputs.export.write(ExportRequest);
+    }
+    let status = &*outputs.export_status;
+    status_line(ui, status.message(), matches!(status, ExportStatus::Failed(_)));
+    let record = &*outputs.record_status;
+    let (label, enabled) = match record {
+        RecordStatus::Recording(..) => ("■ Stop recording (Ctrl+R)", true),
+        RecordStatus::Writing(_) => ("● Record GIF (Ctrl+R)", false),
+        _ => ("● Record GIF (Ctrl+R)", true),
+    };
+    if ui.add_enabled(enabled, egui::Button::new(label)).clicked() {
+        outputs.record.write(ToggleRecord);
+    }
+    status_line(ui, record.message(), matches!(record, RecordStatus::Failed(_)));
 }
 
 fn panel(
@@ -185,9 +278,12 @@ fn panel(
     mut requests: MessageWriter<LibraryRequest>,
     mut over: ResMut<PointerOverUi>,
     mut transition: ResMut<TransitionSettings>,
-    export_status: Res<ExportStatus>,
-    mut export: MessageWriter<ExportRequest>,
-    mut animation_requests: MessageWriter<AnimationRequest>,
+    mut outputs: Outputs,
+    (mut animation_requests, mut color_settings, palette_files): (
+        MessageWriter<AnimationRequest>,
+        ResMut<ColorSettings>,
+        Res<PaletteFiles>,
+    ),
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
@@ -204,6 +300,7 @@ fn panel(
     let mut edited = settings.clone();
     let mut chosen = *style.get();
     let mut edited_repel = repel.clone();
+    let mut edited_colors = color_settings.0.clone();
     let mut dragging = false;
     egui::Panel::left("voxel-art panel").resizable(false).exact_size(270.0).show_inside(&mut root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
@@ -215,6 +312,9 @@ fn panel(
                 ui.separator();
             }
             dragging = parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
+            ui.separator();
+            colors(ui, &mut edited_colors, &palette_files);
+            ui.separator();
             let mut edited_transition = transition.clone();
             transition_settings(ui, &mut edited_transition);
             if edited_transition != *transition {
@@ -222,13 +322,13 @@ fn panel(
             }
             ui.separator();
             stats(ui, &library, &models, &pool, settings.hollow);
-            export_button(ui, &export_status, &mut export);
+            output_buttons(ui, &mut outputs);
             if let Some(error) = &library.last_error {
                 ui.separator();
-                ui.colored_label(egui::Color32::from_rgb(200, 60, 60), format!("last error: {error}"));
+                ui.colored_label(RED, format!("last error: {error}"));
             }
             ui.separator();
-            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · Ctrl+S: export · F: drop · R: repel · P: play/pause · H: panel · Esc: quit").small());
+            ui.label(egui::RichText::new("Left/Right/Space: cycle · 1-9: pick · click: next · S: style · Ctrl+S: export · Ctrl+R: record GIF · F: drop · R: repel · P: play/pause · H: panel · Esc: quit").small());
         });
     });
     // Only touch the resource when something changed, so change detection means "edited".
@@ -239,6 +339,9 @@ fn panel(
     if edited_repel != *repel {
         *repel = edited_repel;
     }
+    if edited_colors != color_settings.0 {
+        color_settings.0 = edited_colors;
+    }
     if chosen != *style.get() {
         next_style.set(chosen);
     }
@@ -248,4 +351,22 @@ fn panel(
 pub(super) fn plugin(app: &mut App) {
     app.add_plugins(EguiPlugin::default());
     app.add_systems(EguiPrimaryContextPass, panel);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_model_whose_animation_is_ignored_says_so_in_the_list() {
+        let mut entry = ModelEntry::new("fox".into(), "fox.glb".into(), "fox.glb".into(), ModelStatus::Ready);
+        assert_eq!(entry_label(&entry), ("fox".to_owned(), None, None));
+        entry.warning = Some("the animation is ignored: bad joint".into());
+        assert_eq!(
+            entry_label(&entry),
+            ("fox  ⚠".to_owned(), Some(AMBER), Some("the animation is ignored: bad joint"))
+        );
+        entry.status = ModelStatus::Failed("unreadable".into());
+        assert_eq!(entry_label(&entry), ("fox  ⚠ failed".to_owned(), Some(RED), Some("unreadable")));
+    }
 }

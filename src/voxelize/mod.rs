@@ -16,8 +16,9 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
+use crate::palette::recolored;
 use crate::schedule::AppSystems;
-use crate::settings::{SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
 
 /// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -39,9 +40,17 @@ pub struct VoxelizeJob {
     task: Task<JobResult>,
 }
 
-/// What a job hands back: the soup it read (or was given), the animation read with it (a file with clips) and
-/// its voxels, or why the file failed.
-type JobResult = Result<(Arc<TriangleSoup>, Option<AnimatedModel>, VoxelModel), String>;
+/// What a job hands back: what it read (or was given) and its voxels, or why the file failed.
+type JobResult = Result<(Imported, VoxelModel), String>;
+
+/// A file as the core's importer read it.
+struct Imported {
+    soup: Arc<TriangleSoup>,
+    /// The animation, when the file has clips the core can play.
+    animation: Option<AnimatedModel>,
+    /// Why the file's animation data was refused (the model then shows still).
+    animation_error: Option<String>,
+}
 
 /// What a job starts from: the soup read before, or the file the core's importer reads first.
 enum JobInput {
@@ -52,23 +61,24 @@ enum JobInput {
 impl JobInput {
     /// Imports (if needed) and voxelizes.
     fn run(self, options: &voxel_core::VoxelizeOptions) -> JobResult {
-        let (soup, animation) = match self {
-            JobInput::Read(soup) => (soup, None),
+        let imported = match self {
+            JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None },
             JobInput::File(path) => read(&path)?,
         };
-        let model = voxel_core::voxelize(&soup, options).map_err(|e| e.to_string())?;
-        Ok((soup, animation, model))
+        let model = voxel_core::voxelize(&imported.soup, options).map_err(|e| e.to_string())?;
+        Ok((imported, model))
     }
 }
 
 /// Reads a file once: its soup, and its animation when it has clips. A file whose animation data the core
-/// refuses still shows, still (read again without its animations: the error says nothing about the soup).
-fn read(path: &std::path::Path) -> Result<(Arc<TriangleSoup>, Option<AnimatedModel>), String> {
-    match voxel_core::load_animated_file(path) {
-        Ok(model) if model.clips().is_empty() => Ok((Arc::new(model.into_rest_soup()), None)),
-        Ok(model) => Ok((Arc::new(model.rest_soup().clone()), Some(model))),
-        Err(_) => Ok((Arc::new(voxel_core::load_file(path).map_err(|e| e.to_string())?), None)),
-    }
+/// refuses still shows, still (read again without its animations), with the reason kept for the model list.
+fn read(path: &std::path::Path) -> Result<Imported, String> {
+    let (soup, animation, animation_error) = match voxel_core::load_animated_file(path) {
+        Ok(model) if model.clips().is_empty() => (model.into_rest_soup(), None, None),
+        Ok(model) => (model.rest_soup().clone(), Some(model), None),
+        Err(e) => (voxel_core::load_file(path).map_err(|e| e.to_string())?, None, Some(e.to_string())),
+    };
+    Ok(Imported { soup: Arc::new(soup), animation, animation_error })
 }
 
 /// Starts a new generation when voxelization settings change.
@@ -135,11 +145,13 @@ fn start_jobs(
 }
 
 /// Collects finished jobs: keeps the soup read, asks Bevy for the original glTF (for the preview) the first
-/// time, and stores the voxels; voxels of an older generation are dropped.
+/// time, and stores the voxels as sampled and in the colour stage's colours; voxels of an older generation are
+/// dropped.
 fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    colors: Res<ColorSettings>,
     asset_server: Res<AssetServer>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
@@ -147,20 +159,25 @@ fn finish_jobs(
     for (entity, mut job) in &mut jobs {
         let Some(mut result) = check_ready(&mut job.task) else { continue };
         commands.entity(entity).despawn();
-        if let (Ok((soup, animation, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
+        if let (Ok((imported, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
             && entry.soup.is_none()
         {
-            entry.soup = Some(soup.clone());
-            entry.animation = animation.take().map(Playback::new);
+            entry.soup = Some(imported.soup.clone());
+            entry.animation = imported.animation.take().map(Playback::new);
+            if let Some(reason) = imported.animation_error.take() {
+                warn!("{}: the animation is ignored: {reason}", entry.name);
+                entry.warning = Some(format!("the animation is ignored: {reason}"));
+            }
             entry.gltf = asset_server.load(AssetPath::parse(&entry.asset_path).into_owned());
         }
         if job.generation != generation.0 {
             continue;
         }
         match result {
-            Ok((_, _, model)) => {
+            Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset(recolored(&model, &colors.0))));
+                    entry.sampled = Some(Arc::new(model));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;

@@ -301,3 +301,47 @@ fn the_morph_cube_shows_its_weights_pose() {
     let hollow = app.world().resource::<VoxelSettings>().hollow;
     assert_eq!(shown_cells(&app).keys().copied().collect::<HashSet<_>>(), model_cells(&shown, hollow));
 }
+
+/// A one-triangle .glb with a clip whose translation sampler has two keyframe times and one value.
+fn broken_clip_glb() -> Vec<u8> {
+    let floats: [f32; 14] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0];
+    let bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "animations": [{
+            "name": "slide",
+            "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+            "samplers": [{"input": 1, "output": 2}]
+        }],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 8},
+            {"buffer": 0, "byteOffset": 44, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]},
+            {"bufferView": 2, "componentType": 5126, "count": 1, "type": "VEC3"}
+        ]
+    });
+    voxel_core::glb::pack(&serde_json::to_vec(&json).unwrap(), &bin).unwrap()
+}
+
+#[test]
+fn an_animation_the_core_refuses_shows_the_model_still_with_a_warning_naming_why() {
+    let file = crate::harness::temp_file("broken-clip.glb", &broken_clip_glb());
+    let apple = crate::harness::shipped("apple.glb");
+    let mut app = test_app(AppArgs { models: vec![file.clone(), apple], no_shipped: true, ..default() });
+    run_until(&mut app, LIMIT, all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    let entry = &library.entries[0];
+    assert_eq!(entry.status, voxel_art::model::ModelStatus::Ready, "the model still shows");
+    assert!(entry.animation.is_none(), "no playback for a refused animation");
+    let reason = voxel_core::load_animated_file(&file).unwrap_err().to_string();
+    assert!(reason.contains("animation slide"), "{reason}");
+    assert_eq!(entry.warning.as_deref(), Some(format!("the animation is ignored: {reason}").as_str()));
+    assert_eq!(library.entries[1].warning, None, "a file without clips has nothing to warn about");
+}

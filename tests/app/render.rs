@@ -56,8 +56,8 @@ fn screenshot(out: &Path, frames: u32) -> Option<std::process::Output> {
     run_app(&["--screenshot".as_ref(), out.as_os_str(), "--frames".as_ref(), frames.to_string().as_ref()])
 }
 
-/// Runs a screenshot that must fail: a non-zero status and `reason` in what it printed.
-fn assert_screenshot_fails(args: &[&std::ffi::OsStr], reason: &str) {
+/// Runs the app where it must fail: a non-zero status and `reason` in what it printed.
+fn assert_run_fails(args: &[&std::ffi::OsStr], reason: &str) {
     let Some(run) = run_app(args) else { return };
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success(), "exit status {} for {args:?}", run.status);
@@ -72,12 +72,12 @@ fn a_screenshot_that_cannot_be_taken_or_written_exits_with_the_reason() {
     std::fs::write(&junk, b"not a model").unwrap();
     let out = dir.join("out.png");
     let only_junk = ["--no-shipped".as_ref(), junk.as_os_str(), "--screenshot".as_ref(), out.as_os_str()];
-    assert_screenshot_fails(&only_junk, "no model could be shown");
+    assert_run_fails(&only_junk, "no model could be shown");
     let then = ["--screenshot".as_ref(), out.as_os_str(), "--then".as_ref(), "99".as_ref()];
-    assert_screenshot_fails(&then, "--then 99");
+    assert_run_fails(&then, "--then 99");
     let unwritable = dir.join("junk.glb").join("out.png");
     let args = ["--screenshot".as_ref(), unwritable.as_os_str(), "--frames".as_ref(), "1".as_ref()];
-    assert_screenshot_fails(&args, "cannot write");
+    assert_run_fails(&args, "cannot write");
     assert!(!out.exists());
 }
 
@@ -146,4 +146,81 @@ fn assert_lit_model(run: &std::process::Output, out: &Path, model_pixels: usize)
     let shadow = sample(&img, point("shadow"));
     let far = sample(&img, point("floor_far"));
     assert!(luminance(shadow) + 20.0 < luminance(far), "no shadow: under {shadow:?}, far {far:?}");
+}
+
+/// A decoded GIF: its size and every frame as shown (each composed over the ones before) with its delay.
+struct Gif {
+    width: u32,
+    height: u32,
+    frames: Vec<(image::RgbaImage, u16)>,
+}
+
+fn decode_gif(path: &Path) -> Gif {
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options.read_info(std::fs::File::open(path).expect("GIF written")).unwrap();
+    let (width, height) = (u32::from(decoder.width()), u32::from(decoder.height()));
+    let mut canvas = image::RgbaImage::new(width, height);
+    let mut frames = Vec::new();
+    while let Some(frame) = decoder.read_next_frame().unwrap() {
+        let (w, left, top) = (u32::from(frame.width), u32::from(frame.left), u32::from(frame.top));
+        for (i, p) in frame.buffer.chunks_exact(4).enumerate() {
+            if p[3] != 0 {
+                let (x, y) = (left + i as u32 % w, top + i as u32 / w);
+                canvas.put_pixel(x, y, image::Rgba([p[0], p[1], p[2], 255]));
+            }
+        }
+        frames.push((canvas.clone(), frame.delay));
+    }
+    Gif { width, height, frames }
+}
+
+/// Pixels of `img` whose hue is within 0.05 of `hue`, saturated and neither dark nor near white.
+fn pixels_of_hue(img: &image::RgbaImage, hue: f32) -> usize {
+    img.pixels()
+        .filter(|p| {
+            let [h, s, l] = hsl([p[0], p[1], p[2]]);
+            let dh = (h - hue).abs().min(1.0 - (h - hue).abs());
+            dh < 0.05 && s > 0.25 && l > 0.2 && l < 0.85
+        })
+        .count()
+}
+
+#[test]
+fn the_app_records_a_morph_of_the_stage_as_a_gif() {
+    let dir = scratch_dir("record");
+    let out = dir.join("morph.gif");
+    // The apple settles, then the morph to the avocado is recorded for a second.
+    let args = ["--record", out.to_str().unwrap(), "--seconds", "1", "--record-size", "192x108", "--then", "1"];
+    let Some(run) = run_app(&args.map(std::ffi::OsStr::new)) else { return };
+    assert!(run.status.success(), "app failed: {}\n{}", run.status, String::from_utf8_lossy(&run.stderr));
+    let gif = decode_gif(&out);
+    assert_eq!((gif.width, gif.height, gif.frames.len()), (192, 108, 30));
+    let delays: Vec<u16> = gif.frames.iter().map(|(_, d)| *d).collect();
+    assert_eq!(&delays[..6], &[3, 3, 4, 3, 3, 4]);
+    assert_eq!(delays.iter().map(|&d| u32::from(d)).sum::<u32>(), 100, "a second of GIF");
+    let (first, last) = (&gif.frames[0].0, &gif.frames[29].0);
+    // The stage alone: the backdrop's gradient in the top corners (no panel on the left, no tiles on the right),
+    // pinker at the top than lower down.
+    for x in [4.0, 187.0] {
+        let (top, low) = (sample(first, [x, 4.0]), sample(first, [x, 30.0]));
+        let pink = |p: [u8; 3]| i32::from(p[0]) - i32::from(p[2]);
+        assert!(pink(top) > pink(low) + 4, "no gradient at x = {x}: top {top:?}, low {low:?}");
+        assert!(luminance(top) > 150.0 && luminance(low) > 150.0, "background too dark: {top:?} {low:?}");
+    }
+    // The morph: the apple's red voxels at its start, the avocado's green ones a second later.
+    let (red, green) = (0.0, 0.25);
+    assert!(pixels_of_hue(first, red) > 300, "{} red pixels at the start", pixels_of_hue(first, red));
+    assert!(pixels_of_hue(last, green) > 300, "{} green pixels after a second", pixels_of_hue(last, green));
+    assert!(pixels_of_hue(last, red) * 4 < pixels_of_hue(first, red), "the apple's red is gone");
+    assert!(pixels_of_hue(first, green) * 4 < pixels_of_hue(last, green), "the avocado's green came");
+}
+
+#[test]
+fn a_record_to_an_unwritable_path_exits_with_the_file_and_reason() {
+    let dir = scratch_dir("record-errors");
+    std::fs::write(dir.join("file"), b"not a folder").unwrap();
+    let out = dir.join("file").join("out.gif");
+    let args = ["--record".as_ref(), out.as_os_str(), "--seconds".as_ref(), "0.1".as_ref()];
+    assert_run_fails(&args, &format!("error: {}: ", out.display()));
 }

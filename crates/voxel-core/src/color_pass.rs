@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
-use crate::geom::{GridTriangle, closest_point_barycentric, distance2, point_at};
+use crate::geom::{GridTriangle, closest_point_barycentric, distance2, farther_than, point_at};
 use crate::grid::{AscendingCoords, GridSpec};
 use crate::shell::Shell;
 use crate::shell::octree::ShellOctree;
@@ -29,7 +29,8 @@ const CELLS_PER_TASK: usize = 1024;
 const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
 
 /// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
-/// weights of its closest point.
+/// weights of its closest point. A candidate that [`farther_than`] the nearest so far is not measured (cells
+/// crossed by many triangles much smaller than a cell skip most of theirs).
 fn nearest_among(
     tris: &[GridTriangle],
     p: DVec3,
@@ -37,6 +38,9 @@ fn nearest_among(
 ) -> Option<(usize, [f64; 3])> {
     let mut best: Option<(usize, f64, [f64; 3])> = None;
     for t in candidates {
+        if best.is_some_and(|(_, bd, _)| farther_than(&tris[t], p, bd)) {
+            continue;
+        }
         let w = closest_point_barycentric(p, &tris[t]);
         let d = point_at(&tris[t], w).distance_squared(p);
         if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {

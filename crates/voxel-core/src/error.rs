@@ -31,7 +31,7 @@ pub enum VoxelError {
     /// A vertex position is NaN or infinite.
     #[error("non-finite vertex position (NaN or infinity) in {0}")]
     NonFinite(String),
-    /// The requested grid is larger than the configured cell budget.
+    /// The requested grid has more cells than the voxelizer can index ([`crate::grid::MAX_CELLS`]).
     #[error("grid {nx}x{ny}x{nz} = {cells} cells exceeds the budget of {budget} cells; use a coarser grid")]
     GridTooLarge {
         /// Cells along x.
@@ -43,6 +43,24 @@ pub enum VoxelError {
         /// nx * ny * nz.
         cells: u64,
         /// The configured maximum.
+        budget: u64,
+    },
+    /// The voxelization would need more memory than is available (or than the caller allows).
+    #[error(
+        "grid {nx}x{ny}x{nz} needs about {} MB, more than the {} MB available; use a coarser grid (or --max-memory)",
+        needed.div_ceil(1_000_000),
+        budget / 1_000_000
+    )]
+    OutOfMemory {
+        /// Cells along x.
+        nx: u32,
+        /// Cells along y.
+        ny: u32,
+        /// Cells along z.
+        nz: u32,
+        /// The estimated peak memory in bytes.
+        needed: u64,
+        /// The memory available to it in bytes.
         budget: u64,
     },
     /// A parameter is out of its valid range.

@@ -218,6 +218,17 @@ pub fn point_at(t: &GridTriangle, w: [f64; 3]) -> DVec3 {
     t[0] * w[0] + t[1] * w[1] + t[2] * w[2]
 }
 
+/// Whether triangle `t` lies farther from `p` than the squared distance `d2`, by more than the rounding of a
+/// computed closest point (10⁻⁹ relative): its bounding box does. Such a triangle can be neither nearer nor
+/// as near as one at `d2`, so a nearest-triangle search need not measure it (outputs stay the same).
+#[inline]
+pub(crate) fn farther_than(t: &GridTriangle, p: DVec3, d2: f64) -> bool {
+    let lo = t[0].min(t[1]).min(t[2]);
+    let hi = t[0].max(t[1]).max(t[2]);
+    let bound = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
+    bound > d2 + 1e-9 * (1.0 + bound)
+}
+
 /// The squared distance from `p` to triangle `t`.
 pub fn distance2(p: DVec3, t: &GridTriangle) -> f64 {
     point_at(t, closest_point_barycentric(p, t)).distance_squared(p)

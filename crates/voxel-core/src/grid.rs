@@ -1,11 +1,14 @@
-//! The voxel grid: normalization of the model (the article's `modelSize` scaling), cell sizes, the cell
-//! budget, and a packed bit set over cells.
+//! The voxel grid: normalization of the model (the article's `modelSize` scaling), cell sizes, the largest
+//! cell count a grid may have (the voxelizer's budget is memory: `memory.rs`), and a packed bit set over cells.
 
 use glam::DVec3;
 
 use crate::error::{Result, VoxelError};
 use crate::geom::GridTriangle;
 use crate::soup::TriangleSoup;
+
+/// The most cells a grid may have: cells are numbered with `u32`.
+pub const MAX_CELLS: u64 = u32::MAX as u64;
 
 /// How the cell size is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -146,7 +149,7 @@ impl GridSpec {
             cells: (nx * ny * nz).min(u64::MAX as f64) as u64,
             budget: max_cells,
         };
-        if n.x * n.y * n.z > max_cells.min(u64::from(u32::MAX)) as f64 || n.max_element() > 65_535.0 {
+        if n.x * n.y * n.z > max_cells.min(MAX_CELLS) as f64 || n.max_element() > 65_535.0 {
             return Err(too_big(n.x, n.y, n.z));
         }
         let dims = [n.x as u32, n.y as u32, n.z as u32];

@@ -33,7 +33,7 @@
 //!   animated glTF of a clip's frames, and .vox through [`vox`]), [`files`] (finding model files).
 //! * **Pipeline**: [`voxelize`](mod@voxelize).
 //! * **Passes**: `columns` (column crossings and how they count), `orient` (closed parts and their facing:
-//!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`.
+//!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`, `memory` (the budget).
 //! * **Leaf types**: [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the
 //!   input), [`grid`] (the grid, the bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel),
 //!   [`model`] (the output), [`glb`].
@@ -58,6 +58,7 @@ pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
+mod memory;
 pub mod model;
 pub mod options;
 mod orient;
@@ -79,6 +80,6 @@ pub use error::{Result, VoxelError};
 pub use grid::{BitGrid, GridSize, GridSpec};
 pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
 pub use model::{Voxel, VoxelModel, VoxelStats};
-pub use options::{DEFAULT_MAX_CELLS, FillMode, Method, ShellMode, VoxelizeOptions};
+pub use options::{FillMode, Method, ShellMode, VoxelizeOptions};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
 pub use voxelize::{voxelize, voxelize_within};

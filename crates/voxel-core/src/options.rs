@@ -65,12 +65,10 @@ pub struct VoxelizeOptions {
     pub method: Method,
     /// Apply the pastel remap to colours.
     pub pastel: bool,
-    /// Largest grid (nx·ny·nz) accepted; the default keeps memory under about 1 GiB.
-    pub max_cells: u64,
+    /// The most memory, in bytes, a voxelization may take (estimated before it starts: grids that need more
+    /// are refused with the memory they need); `None`: what the system has available.
+    pub max_memory: Option<u64>,
 }
-
-/// The default cell budget: 2²⁶ cells (e.g. 406³).
-pub const DEFAULT_MAX_CELLS: u64 = 1 << 26;
 
 impl Default for VoxelizeOptions {
     fn default() -> Self {
@@ -83,7 +81,7 @@ impl Default for VoxelizeOptions {
             hollow: false,
             method: Method::default(),
             pastel: false,
-            max_cells: DEFAULT_MAX_CELLS,
+            max_memory: None,
         }
     }
 }

@@ -7,6 +7,8 @@
 use std::any::Any;
 use std::sync::{Arc, OnceLock};
 
+use rayon::prelude::*;
+
 use crate::error::{Result, VoxelError};
 
 /// How texture coordinates outside [0, 1] are mapped (glTF sampler wrap modes).
@@ -127,6 +129,28 @@ impl Vertex {
     }
 }
 
+/// Indexed vertices, their attributes in separate lists (as a glTF primitive holds them).
+pub(crate) struct IndexedVertices<'a> {
+    /// World-space positions.
+    pub positions: &'a [[f32; 3]],
+    /// Texture coordinates, if any (else 0).
+    pub uvs: Option<&'a [[f32; 2]]>,
+    /// Linear RGBA colours, if any (else white).
+    pub colors: Option<&'a [[f32; 4]]>,
+}
+
+impl IndexedVertices<'_> {
+    /// Vertex `i` as a corner.
+    #[inline]
+    fn corner(&self, i: usize) -> Vertex {
+        Vertex {
+            position: self.positions[i],
+            uv: self.uvs.map_or([0.0; 2], |u| u[i]),
+            color: self.colors.map_or([1.0; 4], |c| c[i]),
+        }
+    }
+}
+
 /// World-space triangles grouped into parts, with their materials.
 ///
 /// The corners are read with [`TriangleSoup::vertices`] and changed only through
@@ -208,11 +232,6 @@ impl TriangleSoup {
     /// Adds a triangle to part `part`.
     pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
         self.sources = None;
-        self.push_corners(part, corners);
-    }
-
-    /// Adds a triangle's corners, forgetting the analysis of the corners so far.
-    fn push_corners(&mut self, part: u32, corners: [Vertex; 3]) {
         self.position_cache.clear();
         self.vertices.extend_from_slice(&corners);
         self.triangle_parts.push(part);
@@ -235,7 +254,7 @@ impl TriangleSoup {
         &self.position_cache
     }
 
-    /// Adds indexed source vertices at `positions` for the triangles pushed with [`Self::push_indexed_triangle`],
+    /// Adds indexed source vertices at `positions` for the triangles pushed with [`Self::push_indexed_triangles`],
     /// and returns the index of the first one. A soup that has corners without a source keeps no sources.
     /// Keeps none (from then on) when a primitive brings more vertices than the `corners` it is about to add (a
     /// large shared accessor: welding them would cost more than the corners), or past `u32` indices.
@@ -254,12 +273,23 @@ impl TriangleSoup {
         base as u32
     }
 
-    /// [`Self::push_triangle`] for corners read from the source vertices `index` (added by
-    /// [`Self::add_sources`]; each corner's position must be its source's, bit for bit).
-    pub(crate) fn push_indexed_triangle(&mut self, part: u32, corners: [Vertex; 3], index: [u32; 3]) {
-        self.push_corners(part, corners);
+    /// Room for `triangles` more triangles.
+    pub(crate) fn reserve_triangles(&mut self, triangles: usize) {
+        self.vertices.reserve(3 * triangles);
+        self.triangle_parts.reserve(triangles);
+    }
+
+    /// Adds `triangles` (three indices into `vertices` each, checked in range by the caller) to part `part`:
+    /// the corners are read in parallel straight into the soup, and `vertices.positions` become their source
+    /// vertices ([`Self::add_sources`]).
+    pub(crate) fn push_indexed_triangles(&mut self, part: u32, vertices: &IndexedVertices<'_>, triangles: &[[u32; 3]]) {
+        let corners = triangles.as_flattened();
+        let base = self.add_sources(vertices.positions, corners.len());
+        self.position_cache.clear();
+        self.vertices.par_extend(corners.par_iter().map(|&i| vertices.corner(i as usize)));
+        self.triangle_parts.resize(self.triangle_parts.len() + triangles.len(), part);
         if let Some(sources) = &mut self.sources {
-            sources.index.extend_from_slice(&index);
+            sources.index.par_extend(corners.par_iter().map(|&i| base + i));
         }
     }
 
@@ -313,30 +343,40 @@ impl TriangleSoup {
         if self.vertices.len() != 3 * self.triangle_parts.len() {
             return Err(VoxelError::Invalid("vertex count is not three per triangle".into()));
         }
-        for (t, &part) in self.triangle_parts.iter().enumerate() {
-            let Some(p) = self.parts.get(part as usize) else {
-                return Err(VoxelError::Invalid(format!("triangle {t} refers to missing part {part}")));
-            };
-            if p.material >= self.materials.len() {
-                return Err(VoxelError::Invalid(format!("part {} refers to a missing material", p.name)));
+        let usable = |t: usize| {
+            self.parts.get(self.triangle_parts[t] as usize).is_some_and(|p| p.material < self.materials.len())
+                && self.triangle(t).iter().all(|v| v.position.iter().all(|c| c.is_finite()))
+        };
+        let Some(t) = (0..self.triangle_count()).into_par_iter().with_min_len(1 << 14).find_first(|&t| !usable(t))
+        else {
+            return Ok(());
+        };
+        let part = self.triangle_parts[t];
+        match self.parts.get(part as usize) {
+            None => Err(VoxelError::Invalid(format!("triangle {t} refers to missing part {part}"))),
+            Some(p) if p.material >= self.materials.len() => {
+                Err(VoxelError::Invalid(format!("part {} refers to a missing material", p.name)))
             }
-            if self.triangle(t).iter().any(|v| v.position.iter().any(|c| !c.is_finite())) {
-                return Err(VoxelError::NonFinite(p.name.clone()));
-            }
+            Some(p) => Err(VoxelError::NonFinite(p.name.clone())),
         }
-        Ok(())
     }
 
     /// The axis-aligned bounds (min, max) of all vertices; `None` when empty.
     pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
         let first = self.vertices.first()?.position;
-        Some(self.vertices.iter().fold((first, first), |(mut lo, mut hi), v| {
+        let grow = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: [f32; 3]| {
             for a in 0..3 {
-                lo[a] = lo[a].min(v.position[a]);
-                hi[a] = hi[a].max(v.position[a]);
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
             }
             (lo, hi)
-        }))
+        };
+        // Min and max of finite values do not depend on the order: chunks in parallel, then their bounds.
+        let chunks = self
+            .vertices
+            .par_chunks(1 << 16)
+            .map(|chunk| chunk.iter().fold((first, first), |bounds, v| grow(bounds, v.position)));
+        Some(chunks.reduce(|| (first, first), |a, b| grow(grow(a, b.0), b.1)))
     }
 }
 

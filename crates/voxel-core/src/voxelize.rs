@@ -8,7 +8,8 @@ use crate::color_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
 use crate::geom::GridTriangle;
-use crate::grid::{BitGrid, GridSpec};
+use crate::grid::{BitGrid, GridSpec, MAX_CELLS};
+use crate::memory;
 use crate::model::{VoxelModel, VoxelStats};
 use crate::options::{FillMode, ShellMode, VoxelizeOptions};
 use crate::orient::analyse_parts_if_unbalanced;
@@ -145,9 +146,9 @@ fn prepare(
     if options.fill == FillMode::None && options.shell == ShellMode::None {
         return Err(VoxelError::Parameter("fill none with shell none leaves nothing to voxelize".into()));
     }
-    let spec =
-        GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, options.max_cells)?;
+    let spec = GridSpec::fit_bounds(bounds, options.model_size, options.grid, options.cell_height_ratio, MAX_CELLS)?;
     let tris = spec.grid_triangles(soup);
+    memory::check(&spec, &tris, options.fill, memory::budget(options.max_memory))?;
     if !tris.iter().any(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0) {
         return Err(VoxelError::Empty(" (every triangle has zero area)".into()));
     }

@@ -72,9 +72,10 @@ pub struct VoxelizeArgs {
     /// Print one JSON object per line per file instead of a readable summary.
     #[arg(long)]
     json: bool,
-    /// Largest accepted grid in cells (memory guard).
-    #[arg(long, default_value_t = crate::options::DEFAULT_MAX_CELLS)]
-    max_cells: u64,
+    /// The most memory a voxelization may take, in MB (default: what the system has available); a grid that
+    /// would need more is refused with the memory it needs.
+    #[arg(long, value_name = "MB")]
+    max_memory: Option<u64>,
     /// Voxelize an animation clip (name or index) frame by frame in one grid; `list` prints the clips.
     /// --out is then one animated file when it ends in .glb or .gltf, else a folder of
     /// <name>-<frame>.<format> files.
@@ -104,7 +105,7 @@ impl VoxelizeArgs {
             method: self.method,
             // The colour stage applies the remap (`palette`).
             pastel: false,
-            max_cells: self.max_cells,
+            max_memory: self.max_memory.map(|mb| mb.saturating_mul(1_000_000)),
         }
     }
 
@@ -294,6 +295,26 @@ mod tests {
     use super::*;
     use crate::shapes::cuboid;
     use crate::soup::TriangleSoup;
+
+    #[test]
+    fn max_memory_is_in_megabytes_and_a_grid_over_it_is_refused_naming_the_memory_needed() {
+        let dir = std::env::temp_dir().join(format!("voxel-core-cli-memory-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let input = dir.join("block.glb");
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [2.0, 1.0, 1.0]), [1.0; 4]);
+        std::fs::write(&input, crate::glb::soup_to_glb(&soup).unwrap()).unwrap();
+        let args = |extra: &[&str]| {
+            let mut args = vec!["voxelize", input.to_str().unwrap(), "-r", "256"];
+            args.extend(extra);
+            VoxelizeArgs::try_parse_from(args).unwrap()
+        };
+        assert_eq!(args(&[]).options().max_memory, None);
+        let tight = args(&["--max-memory", "1"]);
+        assert_eq!(tight.options().max_memory, Some(1_000_000));
+        let err = process(&input, &tight, &tight.options(), &ColorStage::default(), false).unwrap_err().to_string();
+        assert!(err.contains("grid 256x128x128 needs about") && err.contains("more than the 1 MB available"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn the_json_line_times_the_write_only_when_there_is_one() {

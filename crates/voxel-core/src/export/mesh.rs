@@ -201,7 +201,7 @@ pub(crate) mod tests {
         let mut soup = crate::TriangleSoup::default();
         let (lo, hi) = ([10.0 - k, -0.5 * k, -4.0 - k], [10.0 + k, 0.5 * k, -4.0 + k]);
         soup.add_mesh(&crate::shapes::cuboid(lo, hi), [1.0; 4], "box");
-        let spec = GridSpec::fit(&soup, 6.0 * k, crate::GridSize::Cell(0.5), 1.0, crate::DEFAULT_MAX_CELLS).unwrap();
+        let spec = GridSpec::fit(&soup, 6.0 * k, crate::GridSize::Cell(0.5), 1.0, crate::grid::MAX_CELLS).unwrap();
         VoxelModel::from_cells(spec, cells.into_iter().map(|(cell, c)| (cell, [c[0], c[1], c[2], 255])))
     }
 

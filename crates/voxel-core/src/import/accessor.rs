@@ -1,6 +1,8 @@
 //! Bounds-checked accessor reading for every component type glTF allows, including the normalized and
 //! integer encodings of KHR_mesh_quantization and sparse accessors.
 
+use std::borrow::Cow;
+
 use gltf::accessor::{Accessor, DataType, Dimensions};
 use gltf::buffer::View;
 
@@ -47,6 +49,35 @@ pub(crate) fn normalize(raw: f64, ty: DataType) -> f64 {
     }
 }
 
+/// The bytes of `count` elements of `elem` bytes in `view` from `offset` on (checked to be all there), and the
+/// view's stride.
+fn strided_bytes<'b>(
+    view: &View<'_>,
+    buffers: &'b Buffers,
+    offset: usize,
+    count: usize,
+    elem: usize,
+    what: &str,
+) -> Result<(&'b [u8], usize)> {
+    let bytes = buffers.view_bytes(view, what)?;
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(VoxelError::Invalid(format!("{what}: stride {stride} is smaller than an element ({elem})")));
+    }
+    if count == 0 {
+        return Ok((&[], stride));
+    }
+    let end = (count - 1).checked_mul(stride).and_then(|s| s.checked_add(offset)).and_then(|s| s.checked_add(elem));
+    match end.and_then(|end| bytes.get(offset..end)) {
+        Some(elements) => Ok((elements, stride)),
+        None => Err(VoxelError::Invalid(format!(
+            "{what}: {count} elements of {elem} bytes do not fit in buffer view {} ({} bytes)",
+            view.index(),
+            bytes.len()
+        ))),
+    }
+}
+
 /// Reads `count` elements of `ncomp` components of type `ty` from `view` starting at `offset`.
 #[allow(clippy::too_many_arguments)]
 fn read_strided(
@@ -59,31 +90,53 @@ fn read_strided(
     normalized: bool,
     what: &str,
 ) -> Result<Vec<f64>> {
-    let bytes = buffers.view_bytes(view, what)?;
-    let elem = ncomp * ty.size();
-    let stride = view.stride().unwrap_or(elem);
-    if stride < elem {
-        return Err(VoxelError::Invalid(format!("{what}: stride {stride} is smaller than an element ({elem})")));
-    }
-    if count > 0 {
-        let last_end =
-            (count - 1).checked_mul(stride).and_then(|s| s.checked_add(offset)).and_then(|s| s.checked_add(elem));
-        if last_end.is_none_or(|e| e > bytes.len()) {
-            return Err(VoxelError::Invalid(format!(
-                "{what}: {count} elements of {elem} bytes do not fit in buffer view {} ({} bytes)",
-                view.index(),
-                bytes.len()
-            )));
-        }
-    }
+    let (bytes, stride) = strided_bytes(view, buffers, offset, count, ncomp * ty.size(), what)?;
     let mut out = Vec::with_capacity(count * ncomp);
     for i in 0..count {
-        let base = offset + i * stride;
+        let base = i * stride;
         for c in 0..ncomp {
             out.push(read_component(&bytes[base + c * ty.size()..], ty, normalized));
         }
     }
     Ok(out)
+}
+
+/// The elements of an accessor stored as plain little-endian values of `T` (`data_type` with `ncomp`
+/// components, not normalized, not sparse, in a buffer view), in bulk: the view's bytes themselves when they
+/// are packed and aligned (no copy), else one unaligned read an element. `None` for any other encoding (and
+/// on big-endian targets): [`read_accessor`] reads those.
+fn read_plain<'b, T: bytemuck::Pod>(
+    accessor: &Accessor<'_>,
+    buffers: &'b Buffers,
+    data_type: DataType,
+    ncomp: usize,
+    what: &str,
+) -> Result<Option<Cow<'b, [T]>>> {
+    let plain = accessor.data_type() == data_type
+        && component_count(accessor.dimensions()) == ncomp
+        && !accessor.normalized()
+        && accessor.sparse().is_none()
+        && cfg!(target_endian = "little");
+    let (Some(view), true) = (accessor.view(), plain) else { return Ok(None) };
+    let size = std::mem::size_of::<T>();
+    let count = accessor.count();
+    let (bytes, stride) = strided_bytes(&view, buffers, accessor.offset(), count, size, what)?;
+    if stride == size
+        && let Ok(values) = bytemuck::try_cast_slice::<u8, T>(bytes)
+    {
+        return Ok(Some(Cow::Borrowed(values)));
+    }
+    let values = (0..count).map(|i| bytemuck::pod_read_unaligned(&bytes[i * stride..i * stride + size])).collect();
+    Ok(Some(Cow::Owned(values)))
+}
+
+/// [`read_plain`] for `N` f32 components an element.
+pub(crate) fn read_plain_f32<'b, const N: usize>(
+    accessor: &Accessor<'_>,
+    buffers: &'b Buffers,
+    what: &str,
+) -> Result<Option<Cow<'b, [[f32; N]]>>> {
+    read_plain(accessor, buffers, DataType::F32, N, what)
 }
 
 /// Reads an accessor as a flat list of f64 components (`count * components` values), applying sparse
@@ -134,6 +187,9 @@ pub(crate) fn read_vecs<const N: usize>(
     buffers: &Buffers,
     what: &str,
 ) -> Result<Vec<[f32; N]>> {
+    if let Some(values) = read_plain_f32(accessor, buffers, what)? {
+        return Ok(values.into_owned());
+    }
     let (values, ncomp) = read_accessor(accessor, buffers, what)?;
     to_vecs(&values, ncomp, what)
 }
@@ -146,10 +202,16 @@ pub(crate) fn to_vecs<const N: usize>(values: &[f64], ncomp: usize, what: &str) 
     Ok(values.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i] as f32)).collect())
 }
 
-/// Reads an index accessor (unsigned integers, one component).
-pub(crate) fn read_indices(accessor: &Accessor<'_>, buffers: &Buffers, what: &str) -> Result<Vec<u32>> {
+/// Reads an index accessor (unsigned integers, one component): plain `u32` indices as they are in the buffer.
+pub(crate) fn read_indices<'b>(accessor: &Accessor<'_>, buffers: &'b Buffers, what: &str) -> Result<Cow<'b, [u32]>> {
     if !matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32) || accessor.normalized() {
         return Err(VoxelError::Invalid(format!("{what}: indices must be unsigned integers")));
+    }
+    if let Some(indices) = read_plain::<u32>(accessor, buffers, DataType::U32, 1, what)? {
+        return Ok(indices);
+    }
+    if let Some(indices) = read_plain::<u16>(accessor, buffers, DataType::U16, 1, what)? {
+        return Ok(indices.iter().map(|&i| u32::from(i)).collect());
     }
     let (values, ncomp) = read_accessor(accessor, buffers, what)?;
     if ncomp != 1 {

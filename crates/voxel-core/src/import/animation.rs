@@ -143,7 +143,7 @@ fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
 }
 
 /// A decoded primitive with its morph-target position deltas and skin influences.
-fn read_primitive(decoded: &DecodedPrimitive, prim: &gltf::Primitive<'_>, buffers: &Buffers) -> Result<Primitive> {
+fn read_primitive(decoded: &DecodedPrimitive<'_>, prim: &gltf::Primitive<'_>, buffers: &Buffers) -> Result<Primitive> {
     let name = &decoded.name;
     let count = decoded.positions.len();
     let targets = prim
@@ -197,7 +197,7 @@ fn read_primitive(decoded: &DecodedPrimitive, prim: &gltf::Primitive<'_>, buffer
     }
     Ok(Primitive {
         positions: decoded.positions.iter().map(|&p| Vec3::from(p)).collect(),
-        corners: decoded.triangles.iter().flatten().copied().collect(),
+        corners: decoded.corners.to_vec(),
         targets,
         influences,
     })

@@ -2,11 +2,13 @@
 //! by their nodes' world transforms into a [`TriangleSoup`]: the static import, and the base the animated one
 //! builds on (`animation`).
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
 use glam::{DMat4, DVec3};
 use gltf::mesh::Mode;
+use rayon::prelude::*;
 
 use super::accessor;
 use super::buffers::Buffers;
@@ -14,7 +16,7 @@ use super::draco::DracoPrimitive;
 use super::materials::MaterialCache;
 use super::validate::{self, MAX_TRIANGLES};
 use crate::error::{Result, VoxelError};
-use crate::soup::{TriangleSoup, Vertex};
+use crate::soup::{IndexedVertices, TriangleSoup};
 
 /// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
 pub(super) struct PartSource {
@@ -45,6 +47,11 @@ pub(super) fn import_with<T>(
     let instances = scene_instances(&document)?;
     let primitives = instances.iter().filter_map(|(node, _)| node.mesh()).flat_map(|mesh| mesh.primitives());
     builder.materials.prefetch(primitives.filter(has_surface), &buffers);
+    let mut triangles = 0usize;
+    for mesh in instances.iter().filter_map(|(node, _)| node.mesh()) {
+        triangles = triangles.saturating_add(builder.decode_mesh(&mesh)?);
+    }
+    builder.soup.reserve_triangles(triangles.min(MAX_TRIANGLES));
     for (node, transform) in instances {
         if let Some(mesh) = node.mesh() {
             builder.add_mesh(node.index(), &mesh, &transform)?;
@@ -107,17 +114,25 @@ fn has_surface(prim: &gltf::Primitive<'_>) -> bool {
     !matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip)
 }
 
-/// Expands primitive indices of `mode` into triangle corner triples.
-fn triangles_of(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+/// Expands primitive indices of `mode` into triangle corners, three a triangle (a triangle list's are its
+/// indices, a trailing partial triangle left out).
+fn triangles_of(mode: Mode, indices: Cow<'_, [u32]>) -> Cow<'_, [u32]> {
+    let whole = indices.len() / 3 * 3;
     match mode {
-        Mode::Triangles => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        Mode::Triangles => match indices {
+            Cow::Borrowed(indices) => Cow::Borrowed(&indices[..whole]),
+            Cow::Owned(mut indices) => {
+                indices.truncate(whole);
+                Cow::Owned(indices)
+            }
+        },
         Mode::TriangleStrip => indices
             .windows(3)
             .enumerate()
-            .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
+            .flat_map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
             .collect(),
-        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
-        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
+        Mode::TriangleFan => indices.windows(2).skip(1).flat_map(|w| [indices[0], w[0], w[1]]).collect(),
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Cow::Borrowed(&[]),
     }
 }
 
@@ -127,25 +142,35 @@ pub(super) struct SoupBuilder<'a> {
     document: &'a gltf::Document,
     pub(super) buffers: &'a Buffers,
     /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
-    pub(super) parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive>>,
+    pub(super) parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive<'a>>>,
     /// Where each part came from.
     pub(super) instances: Vec<PartSource>,
 }
 
-/// One primitive's triangles in mesh space with their attributes.
-pub(super) struct DecodedPrimitive {
+/// One primitive's triangles in mesh space with their attributes (plain accessors borrowed from the buffers).
+pub(super) struct DecodedPrimitive<'a> {
     /// The glTF primitive index within its mesh.
     pub(super) primitive: usize,
     material: usize,
     pub(super) name: String,
-    pub(super) positions: Vec<[f32; 3]>,
+    pub(super) positions: Cow<'a, [[f32; 3]]>,
     uvs: Option<Vec<[f32; 2]>>,
-    colors: Option<Vec<[f32; 4]>>,
-    pub(super) triangles: Vec<[u32; 3]>,
+    colors: Option<Cow<'a, [[f32; 4]]>>,
+    /// Three vertex indices a triangle.
+    pub(super) corners: Cow<'a, [u32]>,
 }
 
-impl SoupBuilder<'_> {
-    fn add_mesh(&mut self, node: usize, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
+impl DecodedPrimitive<'_> {
+    /// The triangles' vertex indices.
+    fn triangles(&self) -> &[[u32; 3]] {
+        self.corners.as_chunks().0
+    }
+}
+
+impl<'a> SoupBuilder<'a> {
+    /// Decodes the primitives of `mesh` unless done already (a mesh shared by several nodes is read once);
+    /// returns its triangle count.
+    fn decode_mesh(&mut self, mesh: &gltf::Mesh<'_>) -> Result<usize> {
         if !self.parts_of_mesh.contains_key(&mesh.index()) {
             let mut decoded = Vec::new();
             for prim in mesh.primitives() {
@@ -155,34 +180,28 @@ impl SoupBuilder<'_> {
             }
             self.parts_of_mesh.insert(mesh.index(), decoded);
         }
-        let prims = &self.parts_of_mesh[&mesh.index()];
-        let added: usize = prims.iter().map(|p| p.triangles.len()).sum();
+        Ok(self.parts_of_mesh[&mesh.index()].iter().map(|p| p.triangles().len()).sum())
+    }
+
+    fn add_mesh(&mut self, node: usize, mesh: &gltf::Mesh<'_>, transform: &DMat4) -> Result<()> {
+        let added = self.decode_mesh(mesh)?;
         if self.soup.triangle_count() + added > MAX_TRIANGLES {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
-        for (decoded, prim) in prims.iter().enumerate() {
+        for (decoded, prim) in self.parts_of_mesh[&mesh.index()].iter().enumerate() {
             let first_vertex = self.soup.vertices().len();
             self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world: Vec<[f32; 3]> = prim
                 .positions
-                .iter()
+                .par_iter()
                 .map(|p| {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
                 })
                 .collect();
-            let base = self.soup.add_sources(&world, 3 * prim.triangles.len());
-            for tri in &prim.triangles {
-                let corners = tri.map(|i| {
-                    let i = i as usize;
-                    Vertex {
-                        position: world[i],
-                        uv: prim.uvs.as_ref().map_or([0.0; 2], |u| u[i]),
-                        color: prim.colors.as_ref().map_or([1.0; 4], |c| c[i]),
-                    }
-                });
-                self.soup.push_indexed_triangle(part, corners, tri.map(|i| base + i));
-            }
+            let vertices =
+                IndexedVertices { positions: &world, uvs: prim.uvs.as_deref(), colors: prim.colors.as_deref() };
+            self.soup.push_indexed_triangles(part, &vertices, prim.triangles());
         }
         Ok(())
     }
@@ -191,7 +210,7 @@ impl SoupBuilder<'_> {
         &mut self,
         mesh: &gltf::Mesh<'_>,
         prim: &gltf::Primitive<'_>,
-    ) -> Result<Option<DecodedPrimitive>> {
+    ) -> Result<Option<DecodedPrimitive<'a>>> {
         let name = format!(
             "{} primitive {}",
             mesh.name().map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned),
@@ -201,15 +220,21 @@ impl SoupBuilder<'_> {
             return Ok(None);
         }
         let draco = DracoPrimitive::decode(prim, self.document, self.buffers, &name)?;
-        let Some((values, ncomp)) = self.attribute(prim, draco.as_ref(), gltf::Semantic::Positions, &name)? else {
-            return Err(VoxelError::Invalid(format!("{name} has no POSITION attribute")));
+        let positions = match self.plain_attribute::<3>(prim, draco.as_ref(), &gltf::Semantic::Positions, &name)? {
+            Some(positions) => positions,
+            None => {
+                let Some((values, ncomp)) = self.attribute(prim, draco.as_ref(), gltf::Semantic::Positions, &name)?
+                else {
+                    return Err(VoxelError::Invalid(format!("{name} has no POSITION attribute")));
+                };
+                Cow::Owned(accessor::to_vecs::<3>(&values, ncomp, &format!("{name} POSITION"))?)
+            }
         };
-        let positions = accessor::to_vecs::<3>(&values, ncomp, &format!("{name} POSITION"))?;
         if positions.iter().flatten().any(|c| !c.is_finite()) {
             return Err(VoxelError::NonFinite(name));
         }
         let indices = match (&draco, prim.indices()) {
-            (Some(draco), _) => draco.indices(),
+            (Some(draco), _) => Cow::Owned(draco.indices()),
             (None, Some(acc)) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
             (None, None) => (0..positions.len() as u32).collect(),
         };
@@ -221,19 +246,26 @@ impl SoupBuilder<'_> {
         }
         let (soup_material, tex_coord) = self.materials.resolve(&mut self.soup, &prim.material(), self.buffers)?;
         let uvs = match tex_coord {
-            Some(set) => match self.attribute(prim, draco.as_ref(), gltf::Semantic::TexCoords(set.index), &name)? {
-                Some((values, ncomp)) => {
-                    let raw = accessor::to_vecs::<2>(&values, ncomp, &format!("{name} TEXCOORD_{}", set.index))?;
+            Some(set) => {
+                let semantic = gltf::Semantic::TexCoords(set.index);
+                let raw = match self.plain_attribute::<2>(prim, draco.as_ref(), &semantic, &name)? {
+                    Some(raw) => Some(raw.into_owned()),
+                    None => match self.attribute(prim, draco.as_ref(), semantic, &name)? {
+                        Some((values, ncomp)) => {
+                            Some(accessor::to_vecs::<2>(&values, ncomp, &format!("{name} TEXCOORD_{}", set.index))?)
+                        }
+                        None => None,
+                    },
+                };
+                if let Some(raw) = &raw {
                     check_len(&name, "TEXCOORD", raw.len(), positions.len())?;
-                    Some(raw.into_iter().map(|uv| set.transform(uv)).collect())
                 }
-                None => None,
-            },
+                raw.map(|raw| raw.into_iter().map(|uv| set.transform(uv)).collect())
+            }
             None => None,
         };
-        let colors = match self.attribute(prim, draco.as_ref(), gltf::Semantic::Colors(0), &name)? {
-            Some((values, ncomp)) => {
-                let c = accessor::to_colors(&values, ncomp, &format!("{name} COLOR_0"))?;
+        let colors = match self.colors(prim, draco.as_ref(), &name)? {
+            Some(c) => {
                 check_len(&name, "COLOR_0", c.len(), positions.len())?;
                 Some(c)
             }
@@ -246,8 +278,47 @@ impl SoupBuilder<'_> {
             positions,
             uvs,
             colors,
-            triangles: triangles_of(prim.mode(), &indices),
+            corners: triangles_of(prim.mode(), indices),
         }))
+    }
+
+    /// The `N`-vectors of attribute `semantic` of an uncompressed `prim` when they are plain f32 in a buffer view
+    /// (read in bulk); `None` for any other encoding, and when the primitive has no such attribute.
+    fn plain_attribute<const N: usize>(
+        &self,
+        prim: &gltf::Primitive<'_>,
+        draco: Option<&DracoPrimitive>,
+        semantic: &gltf::Semantic,
+        name: &str,
+    ) -> Result<Option<Cow<'a, [[f32; N]]>>> {
+        match (draco, prim.get(semantic)) {
+            (None, Some(acc)) => {
+                accessor::read_plain_f32(&acc, self.buffers, &format!("{name} {}", semantic.to_string()))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The linear RGBA `COLOR_0` of `prim` (alpha 1 for RGB), if it has one.
+    fn colors(
+        &self,
+        prim: &gltf::Primitive<'_>,
+        draco: Option<&DracoPrimitive>,
+        name: &str,
+    ) -> Result<Option<Cow<'a, [[f32; 4]]>>> {
+        let semantic = gltf::Semantic::Colors(0);
+        if let Some(rgba) = self.plain_attribute::<4>(prim, draco, &semantic, name)? {
+            return Ok(Some(rgba));
+        }
+        if let Some(rgb) = self.plain_attribute::<3>(prim, draco, &semantic, name)? {
+            return Ok(Some(rgb.iter().map(|&[r, g, b]| [r, g, b, 1.0]).collect()));
+        }
+        match self.attribute(prim, draco, semantic, name)? {
+            Some((values, ncomp)) => {
+                accessor::to_colors(&values, ncomp, &format!("{name} COLOR_0")).map(|c| Some(Cow::Owned(c)))
+            }
+            None => Ok(None),
+        }
     }
 
     /// The values of attribute `semantic` of `prim` (flat, with their component count): from its Draco stream
@@ -282,9 +353,11 @@ mod tests {
 
     #[test]
     fn strips_and_fans_expand_to_triangles() {
-        assert_eq!(triangles_of(Mode::TriangleStrip, &[0, 1, 2, 3]), vec![[0, 1, 2], [2, 1, 3]]);
-        assert_eq!(triangles_of(Mode::TriangleFan, &[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(triangles_of(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
-        assert!(triangles_of(Mode::Lines, &[0, 1, 2]).is_empty());
+        let corners = |mode, indices: &[u32]| triangles_of(mode, Cow::Borrowed(indices)).into_owned();
+        assert_eq!(corners(Mode::TriangleStrip, &[0, 1, 2, 3]), [0, 1, 2, 2, 1, 3]);
+        assert_eq!(corners(Mode::TriangleFan, &[0, 1, 2, 3]), [0, 1, 2, 0, 2, 3]);
+        assert_eq!(corners(Mode::Triangles, &[0, 1, 2, 3]), [0, 1, 2]);
+        assert_eq!(triangles_of(Mode::Triangles, Cow::Owned(vec![0, 1, 2, 3])).into_owned(), [0, 1, 2]);
+        assert!(corners(Mode::Lines, &[0, 1, 2]).is_empty());
     }
 }

@@ -237,11 +237,8 @@ mod tests {
             let mut soup = TriangleSoup::default();
             let material = soup.add_material(Default::default());
             let part = soup.add_part(material, "box");
-            let base = soup.add_sources(&mesh.positions, 3 * mesh.triangles.len());
-            for t in &mesh.triangles {
-                let corners = t.map(|i| crate::soup::Vertex::at(mesh.positions[i as usize]));
-                soup.push_indexed_triangle(part, corners, t.map(|i| base + i));
-            }
+            let vertices = crate::soup::IndexedVertices { positions: &mesh.positions, uvs: None, colors: None };
+            soup.push_indexed_triangles(part, &vertices, &mesh.triangles);
             soup
         };
         let soup = indexed();

@@ -6,7 +6,7 @@
 use glam::DVec3;
 
 use super::Shell;
-use crate::geom::{GridTriangle, distance2};
+use crate::geom::{GridTriangle, distance2, farther_than};
 use crate::grid::{BitGrid, GridSpec};
 
 /// Cells of a level along x, y, z.
@@ -75,8 +75,8 @@ impl<'a> ShellOctree<'a> {
                 // it too, and that cell is no farther than the triangle: nothing nearer is pruned.
                 for &t in self.shell.triangles_of(index(self.levels[0].0, c)) {
                     let t = t as usize;
-                    if best.is_some_and(|(bt, _)| bt == t) {
-                        continue; // already measured from another cell
+                    if best.is_some_and(|(bt, b)| bt == t || farther_than(&tris[t], p, b)) {
+                        continue; // already measured from another cell, or too far to be the nearest
                     }
                     let d = distance2(p, &tris[t]);
                     if best.is_none_or(|(bt, b)| d < b || (d == b && t < bt)) {

@@ -9,9 +9,13 @@ mod compressed;
 mod corpus;
 mod errors;
 mod export;
+mod fine;
 mod gltf_export;
 mod meshopt;
 mod scale;
 mod shapes;
 mod webp;
 mod winding;
+
+#[path = "../support/scenes.rs"]
+mod scenes;

@@ -1,0 +1,123 @@
+//! The voxelizer's memory budget: what a voxelization will take, estimated from its grid and its triangles
+//! before any of it is allocated, against what the machine has available (or a caller's limit).
+//!
+//! The output follows the surface, so the cells themselves cost one bit each in the solid grid (a few bits
+//! while the fill, the flood or the hollow pass run); what grows with the surface are the overlaps of
+//! triangles and cells (the shell's cell–triangle pairs and the fill's column crossings, each sorted once)
+//! and the grid triangles. The estimate bounds each triangle's overlaps by the cells its extent spans on the
+//! plane it faces most, so many tiny triangles (several to a cell) count one overlap each and a large
+//! triangle its area in cells.
+
+use rayon::prelude::*;
+
+use crate::error::{Result, VoxelError};
+use crate::geom::GridTriangle;
+use crate::grid::GridSpec;
+use crate::options::FillMode;
+
+/// Bytes per overlap of a triangle and a cell: the shell's packed pair (8) and its sorted cell and triangle
+/// (8), the fill's crossings, the visible cells with their colour and part (12 each, fewer than the
+/// overlaps). Measured peaks (docs/benchmarks.md) are about half the estimate.
+const BYTES_PER_OVERLAP: f64 = 32.0;
+
+/// Bits per cell at the peak: the solid grid and one more while it is built (a flood fill adds its shell
+/// and outside grids).
+fn bits_per_cell(fill: FillMode) -> f64 {
+    match fill {
+        FillMode::Flood => 4.0,
+        _ => 2.0,
+    }
+}
+
+/// The bytes a voxelization of `tris` in `spec` with `fill` will take at its peak (an estimate that errs
+/// high), besides the soup it reads.
+pub(crate) fn estimate(spec: &GridSpec, tris: &[GridTriangle], fill: FillMode) -> u64 {
+    let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(overlaps_of).sum();
+    let triangles = std::mem::size_of_val(tris) as f64;
+    let cells = spec.cell_count() as f64 * bits_per_cell(fill) / 8.0;
+    (triangles + cells + overlaps * BYTES_PER_OVERLAP) as u64
+}
+
+/// At least the cells triangle `t` overlaps: its extent in cells across the axis its normal is nearest to
+/// (the cells of its projection's bounding box, one at the least), plus one layer.
+fn overlaps_of(t: &GridTriangle) -> f64 {
+    let lo = t[0].min(t[1]).min(t[2]);
+    let hi = t[0].max(t[1]).max(t[2]);
+    let span = (hi.floor() - lo.floor()) + 1.0;
+    let n = (t[1] - t[0]).cross(t[2] - t[0]).abs();
+    let across = if n.x >= n.y && n.x >= n.z {
+        span.y * span.z
+    } else if n.y >= n.z {
+        span.x * span.z
+    } else {
+        span.x * span.y
+    };
+    across.min(span.x * span.y * span.z) + 1.0
+}
+
+/// The memory a voxelization may use: `limit` when given, else what the system has available
+/// (`MemAvailable` of /proc/meminfo; no limit where that cannot be read).
+pub(crate) fn budget(limit: Option<u64>) -> u64 {
+    limit.or_else(available).unwrap_or(u64::MAX)
+}
+
+/// `MemAvailable` of /proc/meminfo, in bytes.
+fn available() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = meminfo.lines().find(|line| line.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Refuses a voxelization of `tris` in `spec` whose estimate exceeds `budget` bytes, naming the memory needed.
+pub(crate) fn check(spec: &GridSpec, tris: &[GridTriangle], fill: FillMode, budget: u64) -> Result<()> {
+    let needed = estimate(spec, tris, fill);
+    if needed <= budget {
+        return Ok(());
+    }
+    let [nx, ny, nz] = spec.dims;
+    Err(VoxelError::OutOfMemory { nx, ny, nz, needed, budget })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridSize;
+    use crate::shapes::uv_sphere;
+    use crate::soup::TriangleSoup;
+
+    #[test]
+    fn the_estimate_follows_the_surface_and_the_cells() {
+        let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 48), [1.0; 4]);
+        let at = |r: u32| {
+            let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(r), 1.0, u64::from(u32::MAX)).unwrap();
+            estimate(&spec, &spec.grid_triangles(&soup), FillMode::Winding) as f64
+        };
+        // At R=1024 the bit grids (2 bits a cell: 268 MB) and the surface (a few million overlaps).
+        let fine = at(1024);
+        assert!((300e6..1000e6).contains(&fine), "{fine}");
+        // Four times the resolution: 64 times the cells, 16 times the surface; the estimate in between.
+        let ratio = fine / at(256);
+        assert!((16.0..64.0).contains(&ratio), "{ratio}");
+    }
+
+    #[test]
+    fn a_budget_below_the_estimate_is_refused_with_the_memory_needed() {
+        let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 16), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(64), 1.0, u64::from(u32::MAX)).unwrap();
+        let tris = spec.grid_triangles(&soup);
+        let needed = estimate(&spec, &tris, FillMode::Winding);
+        assert!(check(&spec, &tris, FillMode::Winding, needed).is_ok());
+        let err = check(&spec, &tris, FillMode::Winding, needed - 1).unwrap_err();
+        assert!(matches!(err, VoxelError::OutOfMemory { needed: n, .. } if n == needed), "{err}");
+        assert!(err.to_string().contains("64x64x64"), "{err}");
+    }
+
+    #[test]
+    fn the_available_memory_is_read_on_linux() {
+        if cfg!(target_os = "linux") {
+            assert!(available().is_some_and(|bytes| bytes > 0));
+        }
+        assert_eq!(budget(Some(5)), 5);
+    }
+}
