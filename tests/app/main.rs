@@ -7,7 +7,6 @@ mod export;
 mod harness;
 mod logic;
 mod modules;
-mod palette;
 mod render;
 mod slider;
 mod styles;
