@@ -236,7 +236,10 @@ fn cue_headless(
     }
     match cue.poll(&mut params, headless.then) {
         CueState::Waiting => {}
-        CueState::Ready => take.cued = true,
+        CueState::Ready => {
+            info!("recording {} for {} s", headless.path.display(), headless.seconds);
+            take.cued = true;
+        }
         CueState::Failed(reason) => {
             fail_headless(&format!("{}: {reason}", headless.path.display()), &mut exit);
             *recorder = Recorder::Idle;
