@@ -62,7 +62,7 @@ fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
 pub fn soup_to_glb(soup: &TriangleSoup) -> Result<Vec<u8>> {
     let mut glb = GlbBuilder::default();
     let mut primitives = Vec::new();
-    let mut add_accessor =
+    let add_accessor =
         |glb: &mut GlbBuilder, data: Vec<f32>, kind: &str, count: usize, bounds: Option<([f32; 3], [f32; 3])>| {
             let mut accessor = serde_json::json!({"componentType": 5126, "count": count, "type": kind});
             if let Some((lo, hi)) = bounds {
