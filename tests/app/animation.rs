@@ -314,7 +314,8 @@ fn broken_clip_glb() -> Vec<u8> {
         &bytes(&[0.0, 1.0]),
         serde_json::json!({"componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]}),
     );
-    let values = builder.accessor(&bytes(&[2.0, 0.0, 0.0]), serde_json::json!({"componentType": 5126, "count": 1, "type": "VEC3"}));
+    let values = builder
+        .accessor(&bytes(&[2.0, 0.0, 0.0]), serde_json::json!({"componentType": 5126, "count": 1, "type": "VEC3"}));
     let primitive = serde_json::json!({"attributes": {"POSITION": triangle}, "material": 0});
     let (mut doc, bin) = builder.one_mesh("animation test", vec![primitive], serde_json::json!([{}]));
     doc["animations"] = serde_json::json!([{
