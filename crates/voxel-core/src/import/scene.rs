@@ -244,7 +244,7 @@ impl<'a> SoupBuilder<'a> {
                 Cow::Owned(accessor::to_vecs::<3>(&values, ncomp, &format!("{name} POSITION"))?)
             }
         };
-        if positions.par_iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+        if positions.iter().flatten().any(|c| !c.is_finite()) {
             return Err(VoxelError::NonFinite(name));
         }
         let indices = match (&draco, prim.indices()) {
@@ -252,7 +252,7 @@ impl<'a> SoupBuilder<'a> {
             (None, Some(acc)) => accessor::read_indices(&acc, self.buffers, &format!("{name} indices"))?,
             (None, None) => (0..positions.len() as u32).collect(),
         };
-        if let Some(bad) = indices.par_iter().find_first(|&&i| i as usize >= positions.len()) {
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
             return Err(VoxelError::Invalid(format!(
                 "{name}: vertex index {bad} is out of range (the primitive has {} vertices)",
                 positions.len()
