@@ -116,7 +116,7 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
 fn world_positions<'p>(positions: &'p [[f32; 3]], transform: &DMat4) -> Cow<'p, [[f32; 3]]> {
     if *transform == DMat4::IDENTITY {
         let negative_zero = |c: &f32| c.to_bits() == (-0.0f32).to_bits();
-        if !positions.par_iter().any(|p| p.iter().any(negative_zero)) {
+        if !positions.as_flattened().iter().any(negative_zero) {
             return Cow::Borrowed(positions);
         }
         return Cow::Owned(positions.par_iter().map(|p| p.map(|c| c + 0.0)).collect());
@@ -210,7 +210,7 @@ impl<'a> SoupBuilder<'a> {
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world = world_positions(&prim.positions, transform);
             // Placed positions can overflow (borrowed ones were checked when decoded).
-            if matches!(world, Cow::Owned(_)) && world.par_iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+            if matches!(world, Cow::Owned(_)) && world.as_flattened().iter().any(|c| !c.is_finite()) {
                 return Err(VoxelError::NonFinite(prim.name.clone()));
             }
             let vertices =
