@@ -4,6 +4,7 @@
 //! the rest read it.
 
 pub mod playback;
+pub mod surface;
 
 use std::path::PathBuf;
 use std::sync::Arc;
