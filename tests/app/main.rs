@@ -1,6 +1,7 @@
 //! Integration tests of the voxel-art binary and app (one test binary).
 
 mod animation;
+mod big;
 mod cli;
 mod common;
 mod export;
