@@ -66,8 +66,10 @@ pub struct ModelEntry {
     pub status: ModelStatus,
     /// The triangles, read once by the core's importer.
     pub soup: Option<Arc<TriangleSoup>>,
-    /// The latest voxelization.
+    /// The latest voxelization, in the colours of the colour stage ([`crate::settings::ColorSettings`]).
     pub voxels: Option<Handle<VoxelModelAsset>>,
+    /// The latest voxelization as sampled (before the colour stage): a new palette recolours `voxels` from it.
+    pub sampled: Option<Arc<VoxelModel>>,
     /// The settings generation `voxels` was made with.
     pub voxels_generation: Option<u64>,
     /// How long the latest voxelization took.
@@ -89,6 +91,7 @@ impl ModelEntry {
             status,
             soup: None,
             voxels: None,
+            sampled: None,
             voxels_generation: None,
             voxelize_ms: 0.0,
             animation: None,

@@ -16,8 +16,9 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
+use crate::palette::recolored;
 use crate::schedule::AppSystems;
-use crate::settings::{SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
 
 /// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -144,11 +145,13 @@ fn start_jobs(
 }
 
 /// Collects finished jobs: keeps the soup read, asks Bevy for the original glTF (for the preview) the first
-/// time, and stores the voxels; voxels of an older generation are dropped.
+/// time, and stores the voxels as sampled and in the colour stage's colours; voxels of an older generation are
+/// dropped.
 fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    colors: Res<ColorSettings>,
     asset_server: Res<AssetServer>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
@@ -173,7 +176,8 @@ fn finish_jobs(
         match result {
             Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset(recolored(&model, &colors.0))));
+                    entry.sampled = Some(Arc::new(model));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;

@@ -7,6 +7,7 @@ mod export;
 mod harness;
 mod logic;
 mod modules;
+mod palette;
 mod render;
 mod slider;
 mod styles;
