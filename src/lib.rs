@@ -121,6 +121,10 @@ pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
 
 /// Runs the app until its window closes; returns the exit status.
 fn run_app(args: config::AppArgs) -> i32 {
+    if let Err(message) = args.color_settings() {
+        eprintln!("{message}");
+        return 1;
+    }
     let exit = App::new().add_plugins(AppPlugin { args }).run();
     match exit {
         AppExit::Success => 0,

@@ -8,7 +8,7 @@ use bevy::window::FileDragAndDrop;
 
 use crate::assets::{asset_root, file_asset_path};
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus};
-use crate::palette::{PaletteFile, is_palette_file};
+use crate::palette::is_palette_file;
 use crate::schedule::AppSystems;
 
 /// The models the list starts with (from the command line).
@@ -130,19 +130,13 @@ fn handle_requests(mut requests: MessageReader<LibraryRequest>, mut library: Res
     }
 }
 
-/// A dropped model file or folder joins the list; a palette file becomes the palette.
-fn dropped_files(
-    mut drops: MessageReader<FileDragAndDrop>,
-    mut requests: MessageWriter<LibraryRequest>,
-    mut palettes: MessageWriter<PaletteFile>,
-) {
+/// A dropped model file or folder joins the list (a palette file is the `palette` plugin's).
+fn dropped_files(mut drops: MessageReader<FileDragAndDrop>, mut requests: MessageWriter<LibraryRequest>) {
     for drop in drops.read() {
-        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop {
-            if is_palette_file(path_buf) {
-                palettes.write(PaletteFile(path_buf.clone()));
-            } else {
-                requests.write(LibraryRequest::Add(path_buf.clone()));
-            }
+        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop
+            && !is_palette_file(path_buf)
+        {
+            requests.write(LibraryRequest::Add(path_buf.clone()));
         }
     }
 }
@@ -152,7 +146,6 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<LibrarySetup>();
     app.add_message::<LibraryRequest>();
     app.add_message::<FileDragAndDrop>();
-    app.add_message::<PaletteFile>();
     app.add_systems(Startup, populate);
     app.add_systems(
         Update,

@@ -1,8 +1,10 @@
 //! Preview viewports: each model's original glTF in a small viewport along the right edge, with its own
 //! camera, render layer and soft coloured background, turning slowly; clicking one picks that model. An
-//! animated model's tile plays its clip (`play`).
+//! animated model's tile plays its clip (`play`). A file Bevy's glTF loader refuses but the core reads (WebP
+//! textures: bevy_gltf does not decode EXT_texture_webp) shows its triangles untextured (`untextured`).
 
 mod play;
+mod untextured;
 
 use bevy::app::{HierarchyPropagatePlugin, Propagate};
 use bevy::camera::Viewport;
@@ -56,11 +58,13 @@ fn setup_light(mut commands: Commands) {
     ));
 }
 
-/// Spawns a camera and the original scene for every loaded model that has none yet.
+/// Spawns a camera and the original scene for every loaded model that has none yet (the core's triangles
+/// untextured when Bevy could not load the file).
 fn spawn_previews(
     mut commands: Commands,
     library: Res<ModelLibrary>,
-    gltfs: Res<Assets<Gltf>>,
+    (gltfs, asset_server): (Res<Assets<Gltf>>, Res<AssetServer>),
+    (mut meshes, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
     cameras: Query<&PreviewCamera>,
 ) {
     let n = library.entries.len().min(MAX_PREVIEWS);
@@ -68,8 +72,15 @@ fn spawn_previews(
         if cameras.iter().any(|c| c.0 == i) || matches!(entry.status, ModelStatus::Loading | ModelStatus::Failed(_)) {
             continue;
         }
-        let (Some(gltf), Some(soup)) = (gltfs.get(&entry.gltf), entry.soup.as_ref()) else { continue };
-        let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
+        let Some(soup) = entry.soup.as_ref() else { continue };
+        let scene = match gltfs.get(&entry.gltf) {
+            Some(gltf) => match gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) {
+                Some(scene) => Some(scene),
+                None => continue,
+            },
+            None if asset_server.load_state(&entry.gltf).is_failed() => None,
+            None => continue,
+        };
         let layer = RenderLayers::layer(i + 1);
         let hue = i as f32 / n.max(1) as f32 * 360.0;
         commands.spawn((
@@ -96,10 +107,17 @@ fn spawn_previews(
                 Visibility::default(),
                 Propagate(layer),
             ))
-            .with_child((
-                WorldAssetRoot(scene),
-                Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale),
-            ));
+            .with_children(|root| {
+                let fit = Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale);
+                match scene {
+                    Some(scene) => root.spawn((WorldAssetRoot(scene), fit)),
+                    None => root.spawn((
+                        Mesh3d(meshes.add(untextured::mesh(soup))),
+                        MeshMaterial3d(materials.add(untextured::material())),
+                        fit,
+                    )),
+                };
+            });
     }
 }
 

@@ -15,7 +15,6 @@ use voxel_core::{VoxelModel, VoxelizeOptions};
 
 use crate::model::playback::{PoseRequest, Rig};
 use crate::model::{ModelLibrary, Playback, VoxelModelAsset};
-use crate::palette::recolored;
 use crate::schedule::AppSystems;
 use crate::settings::{ColorSettings, Style, VoxelSettings};
 use crate::transition::TransitionSystems;
@@ -193,7 +192,7 @@ fn place(
     model: VoxelModel,
     colors: &ColorStage,
 ) -> Option<AssetId<VoxelModelAsset>> {
-    let colored = VoxelModelAsset(recolored(&model, colors));
+    let colored = VoxelModelAsset::colored(&model, colors);
     playback.sampled = Some(model);
     if let Some(handle) = &playback.pose
         && let Some(mut shown) = models.get_mut(handle)

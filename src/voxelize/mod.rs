@@ -16,7 +16,6 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
-use crate::palette::recolored;
 use crate::schedule::AppSystems;
 use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
 
@@ -176,7 +175,7 @@ fn finish_jobs(
         match result {
             Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModelAsset(recolored(&model, &colors.0))));
+                    entry.voxels = Some(models.add(VoxelModelAsset::colored(&model, &colors.0)));
                     entry.sampled = Some(Arc::new(model));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;

@@ -17,7 +17,6 @@ use voxel_art::palette::PaletteFiles;
 use voxel_art::settings::ColorSettings;
 use voxel_art::transition::{ActiveTransition, TransitionStarted};
 use voxel_art::voxelize::{VoxelizeGeneration, VoxelizeJob};
-use voxel_core::VoxelizeOptions;
 use voxel_core::palette::Palette;
 
 use crate::common::{models_dir, scratch_dir};
@@ -74,7 +73,8 @@ fn step_counting_morphs(app: &mut App, frames: usize) -> usize {
 fn switching_the_palette_recolours_the_shown_voxels_without_voxelizing_or_morphing() {
     let mut app = donut_app();
     // The default is the article's pastel look: the core's pastel voxelization, colour for colour.
-    let pastel = VoxelizeOptions { pastel: true, ..app_options(&app) };
+    let pastel = app_options(&app);
+    assert!(pastel.pastel);
     let core = core_voxelize(&shipped("donut.glb"), &pastel);
     let core_colors: HashSet<[u8; 3]> = core.voxels().map(|v| [v.color[0], v.color[1], v.color[2]]).collect();
     assert_eq!(shown_colors(&app), core_colors);
@@ -197,6 +197,13 @@ fn exporting_an_animated_model_also_writes_its_clip_as_one_animated_glb() {
     assert_eq!(back.clips()[0].name, clip.name);
     assert!((back.clips()[0].duration - clip.duration).abs() < 1e-3, "{:?}", back.clips()[0]);
     let frames = (clip.duration * 30.0).ceil() as usize;
+    // One node a frame, each with its mesh, and one scale channel a frame that shows it in turn.
+    let json = glb_json(animated);
+    let framed = json["nodes"].as_array().unwrap().iter().filter(|n| n.get("mesh").is_some()).count();
+    assert_eq!(framed, frames, "{} nodes", json["nodes"].as_array().unwrap().len());
+    let channels = json["animations"][0]["channels"].as_array().unwrap();
+    assert_eq!(channels.len(), frames);
+    assert!(channels.iter().all(|c| c["target"]["path"] == "scale"), "{channels:?}");
     let mut soup = voxel_core::TriangleSoup::default();
     let pico8 = colors_of(&Palette::from_arg("pico8").unwrap());
     for k in [0, frames / 2, frames - 1] {
@@ -206,4 +213,47 @@ fn exporting_an_animated_model_also_writes_its_clip_as_one_animated_glb() {
         assert!(!shown.is_empty() && shown.is_subset(&pico8), "frame {k}: {shown:?}");
     }
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// The JSON chunk of a .glb file.
+fn glb_json(path: &std::path::Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&bytes[20..20 + length]).unwrap()
+}
+
+#[test]
+fn the_command_line_sets_the_starting_colour_stage_and_a_bad_palette_is_an_error() {
+    use voxel_art::config::Cli;
+    use voxel_core::palette::ColorStage;
+    let parse = |args: &[&str]| {
+        let Ok(Cli { app, .. }) =
+            Cli::parse_args(std::iter::once("voxel-art").chain(args.iter().copied()).map(Into::into).collect())
+        else {
+            panic!("rejected: {args:?}")
+        };
+        app
+    };
+    let app = test_app(AppArgs { no_shipped: true, ..parse(&["--palette", "pico8", "--colors", "4", "--dither"]) });
+    let pico8 = Palette::from_arg("pico8").unwrap();
+    let expected = ColorStage { palette: pico8, max_colors: Some(4), dither: true };
+    assert_eq!(app.world().resource::<ColorSettings>().0, expected);
+    let app = test_app(AppArgs { no_shipped: true, ..parse(&[]) });
+    assert_eq!(*app.world().resource::<ColorSettings>(), ColorSettings::default(), "pastel unless named");
+    assert_eq!(ColorSettings::default().0.palette, Palette::Pastel);
+
+    // A bad palette stops the app before it opens a window: status 1 and the reason.
+    let bad = temp_file("cli-bad.hex", b"ff0000\nnot a colour\n");
+    let run = |palette: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_voxel-art")).args(["--palette", palette]).output().unwrap()
+    };
+    let out = run(bad.to_str().unwrap());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    let reason = "not a usable palette: line 2: \"not a colour\" is not a colour rrggbb";
+    assert_eq!(stderr.trim_end(), format!("error: {}: {reason}", bad.display()));
+    let out = run("nes");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.starts_with("error: nes: not a usable palette: no palette named \"nes\""), "{stderr}");
 }
