@@ -257,3 +257,30 @@ fn the_command_line_sets_the_starting_colour_stage_and_a_bad_palette_is_an_error
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(stderr.starts_with("error: nes: not a usable palette: no palette named \"nes\""), "{stderr}");
 }
+
+#[test]
+fn export_after_a_palette_writes_only_its_colours() {
+    let out = scratch_dir("export-palette");
+    let mut app = test_app(AppArgs {
+        no_shipped: true,
+        models: vec![shipped("donut.glb")],
+        export_dir: Some(out.clone()),
+        ..default()
+    });
+    run_until(&mut app, LIMIT, all_settled);
+    let pico8 = Palette::from_arg("pico8").unwrap();
+    set_colors(&mut app, |c| c.0.palette = pico8.clone());
+    app.update();
+    app.world_mut().write_message(ExportRequest);
+    run_until(&mut app, LIMIT, |app| {
+        !matches!(app.world().resource::<ExportStatus>(), ExportStatus::Idle | ExportStatus::Writing)
+    });
+    let status = app.world().resource::<ExportStatus>().clone();
+    let ExportStatus::Saved(saved, None) = &status else { panic!("{status:?}") };
+    let data = dot_vox::load(saved.vox.0.to_str().unwrap()).unwrap();
+    let used: HashSet<[u8; 3]> =
+        data.models[0].voxels.iter().map(|v| data.palette[usize::from(v.i)]).map(|c| [c.r, c.g, c.b]).collect();
+    assert!(used.len() >= 2 && used.is_subset(&colors_of(&pico8)), "{used:?}");
+    assert_eq!(used, shown_colors(&app), "the .vox holds the colours shown");
+    std::fs::remove_dir_all(&out).unwrap();
+}
