@@ -1,9 +1,12 @@
 //! Preview viewports: each model's original glTF in a small viewport along the right edge, with its own
 //! camera, render layer and soft coloured background, turning slowly; clicking one picks that model. An
 //! animated model's tile plays its clip (`play`). A file too big for Bevy's glTF loader
-//! ([`TILE_TRIANGLES`](crate::voxelize::TILE_TRIANGLES)) shows the surface of its voxels instead.
+//! ([`TILE_TRIANGLES`](crate::voxelize::TILE_TRIANGLES)) shows the surface of its voxels instead; a file Bevy's
+//! glTF loader refuses but the core reads (WebP textures: bevy_gltf does not decode EXT_texture_webp) shows its
+//! triangles untextured (`untextured`).
 
 mod play;
+mod untextured;
 
 use bevy::app::{HierarchyPropagatePlugin, Propagate};
 use bevy::camera::Viewport;
@@ -57,20 +60,20 @@ fn setup_light(mut commands: Commands) {
     ));
 }
 
-/// What a tile shows: the original glTF scene, or for a big file the surface of its voxels.
+/// What a tile shows: the original glTF scene, a big file's voxel surface, or the core's triangles untextured.
 enum TileContent {
     Scene(Handle<WorldAsset>),
     Surface(Handle<Mesh>),
+    Untextured,
 }
 
-/// Spawns a camera and the original scene (or a big file's voxel surface) for every loaded model that has none
-/// yet.
+/// Spawns a camera and the original scene (a big file's voxel surface, or the core's triangles untextured when
+/// Bevy could not load the file) for every loaded model that has none yet.
 fn spawn_previews(
     mut commands: Commands,
     library: Res<ModelLibrary>,
-    gltfs: Res<Assets<Gltf>>,
-    models: Res<Assets<VoxelModelAsset>>,
-    mut materials: ResMut<Assets<StandardMaterial>>,
+    (gltfs, asset_server, models): (Res<Assets<Gltf>>, Res<AssetServer>, Res<Assets<VoxelModelAsset>>),
+    (mut meshes, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
     cameras: Query<&PreviewCamera>,
 ) {
     let n = library.entries.len().min(MAX_PREVIEWS);
@@ -79,6 +82,7 @@ fn spawn_previews(
             continue;
         }
         let Some(soup) = entry.soup.as_ref() else { continue };
+        let soup_bounds = || soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3]));
         let (content, (lo, hi)) = match (&entry.tile_mesh, gltfs.get(&entry.gltf)) {
             (Some(mesh), _) => {
                 // The surface is in the voxels' normalized space: fit their grid.
@@ -89,7 +93,10 @@ fn spawn_previews(
             }
             (None, Some(gltf)) => {
                 let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
-                (TileContent::Scene(scene), soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3])))
+                (TileContent::Scene(scene), soup_bounds())
+            }
+            (None, None) if asset_server.load_state(&entry.gltf).is_failed() => {
+                (TileContent::Untextured, soup_bounds())
             }
             (None, None) => continue,
         };
@@ -124,6 +131,11 @@ fn spawn_previews(
                 let material = materials.add(StandardMaterial { perceptual_roughness: 0.8, ..default() });
                 root.with_child((Mesh3d(mesh), MeshMaterial3d(material), fit))
             }
+            TileContent::Untextured => root.with_child((
+                Mesh3d(meshes.add(untextured::mesh(soup))),
+                MeshMaterial3d(materials.add(untextured::material())),
+                fit,
+            )),
         };
     }
 }

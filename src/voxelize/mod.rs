@@ -21,7 +21,7 @@ use voxel_core::{AnimatedModel, Progress, Stage, TriangleSoup, VoxelModel};
 use crate::model::surface::surface_mesh;
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::{SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
 use crate::threads::job_pool;
 
 /// Files with more triangles than this get a preview tile from their voxels instead of Bevy's glTF loader:
@@ -170,11 +170,13 @@ fn start_jobs(
 }
 
 /// Collects finished jobs: keeps the soup read, asks Bevy for the original glTF (for the preview) the first
-/// time, and stores the voxels; voxels of an older generation are dropped.
+/// time, and stores the voxels as sampled and in the colour stage's colours; voxels of an older generation are
+/// dropped.
 fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    colors: Res<ColorSettings>,
     asset_server: Res<AssetServer>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
     mut meshes: ResMut<Assets<Mesh>>,
@@ -203,7 +205,8 @@ fn finish_jobs(
         match result {
             Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset::colored(&model, &colors.0)));
+                    entry.sampled = Some(Arc::new(model));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;

@@ -8,6 +8,7 @@ mod export;
 mod harness;
 mod logic;
 mod modules;
+mod palette;
 mod render;
 mod slider;
 mod styles;
