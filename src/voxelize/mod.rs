@@ -16,12 +16,8 @@ use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
 use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
 
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::VoxelizeSystems;
 use crate::settings::{SettingDrag, Style, VoxelSettings};
-
-/// The voxelization systems (in `AppSystems::Simulate`).
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct VoxelizeSystems;
 
 /// Bumped whenever a setting that shapes voxelization changes; models voxelized with an older
 /// generation are redone.
@@ -189,6 +185,10 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelizeGeneration>();
     app.add_systems(
         Update,
-        (track_settings, start_jobs, finish_jobs).chain().in_set(AppSystems::Simulate).in_set(VoxelizeSystems),
+        (
+            track_settings.in_set(VoxelizeSystems::Track),
+            start_jobs.in_set(VoxelizeSystems::Start),
+            finish_jobs.in_set(VoxelizeSystems::Finish),
+        ),
     );
 }
