@@ -6,8 +6,8 @@ use std::collections::HashMap;
 
 use bevy::app::PluginsState;
 use bevy::prelude::*;
-use bevy::render::RenderApp;
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+use bevy::render::{MainWorld, RenderApp};
 use voxel_art::config::AppArgs;
 
 /// The ambiguities in `world`'s schedules where a system's name contains one of `ours`, one line each:
@@ -54,7 +54,15 @@ fn no_two_of_our_systems_share_data_in_an_undefined_order_anywhere_in_the_app() 
     let args = AppArgs { no_shipped: true, screenshot: Some("unused.png".into()), ..Default::default() };
     let mut app = whole_app(args);
     let main = ambiguities(app.world_mut(), &["voxel_art::"]);
-    let render = ambiguities(app.sub_app_mut(RenderApp).world_mut(), &["voxel_art::"]);
+    // Extraction systems reach the main world through `MainWorld`, lent to the render world as Bevy's
+    // extraction does.
+    let mut lent = MainWorld::default();
+    std::mem::swap(&mut *lent, app.world_mut());
+    let render_world = app.sub_app_mut(RenderApp).world_mut();
+    render_world.insert_resource(lent);
+    let render = ambiguities(render_world, &["voxel_art::"]);
+    let mut lent = render_world.remove_resource::<MainWorld>().expect("lent above");
+    std::mem::swap(&mut *lent, app.world_mut());
     let all: Vec<_> = main.iter().chain(&render).collect();
     assert!(
         all.is_empty(),
