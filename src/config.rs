@@ -131,8 +131,7 @@ impl AppArgs {
         });
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
         app.insert_state(self.style.unwrap_or_default());
-        let headless = self.screenshot.is_some() || self.record.is_some();
-        app.insert_resource(match (headless, self.repel) {
+        app.insert_resource(match (self.headless(), self.repel) {
             (true, true) => PointerMode::Always,
             (true, false) => PointerMode::Never,
             (false, _) => PointerMode::AfterMove,
@@ -151,6 +150,11 @@ impl AppArgs {
         let path = self.screenshot.clone()?;
         let seeks = self.anim_time.iter().skip(1).copied().collect();
         Some(ScreenshotPlugin { path, frames: self.frames, then: self.then, seeks })
+    }
+
+    /// Whether this run captures headless (`--screenshot` or `--record`) and exits.
+    pub(crate) fn headless(&self) -> bool {
+        self.screenshot.is_some() || self.record.is_some()
     }
 
     /// The recorder: Ctrl+R in the window, or the `--record` run.

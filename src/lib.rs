@@ -35,6 +35,7 @@ mod ui;
 pub mod voxelize;
 
 use bevy::prelude::*;
+use bevy::render::RenderPlugin;
 use bevy::window::{PresentMode, WindowResolution};
 
 pub use schedule::AppSystems;
@@ -84,7 +85,13 @@ impl Plugin for AppPlugin {
                     }),
                     ..default()
                 })
-                .set(asset_plugin),
+                .set(asset_plugin)
+                .set(RenderPlugin {
+                    // A headless capture draws everything from the frame it first appears in (a pipeline
+                    // still compiling would leave it out), so what it shows does not depend on the CPU's load.
+                    synchronous_pipeline_compilation: self.args.headless(),
+                    ..default()
+                }),
         );
         app.add_plugins(ShowPlugin { args: self.args.clone() });
     }

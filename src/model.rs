@@ -4,13 +4,14 @@
 //! the rest read it.
 
 pub mod playback;
+pub mod surface;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
-use voxel_core::{TriangleSoup, Voxel, VoxelModel};
+use voxel_core::{Progress, TriangleSoup, Voxel, VoxelModel};
 
 pub use playback::Playback;
 
@@ -74,6 +75,11 @@ pub struct ModelEntry {
     pub voxelize_ms: f32,
     /// The animation, when the file has clips (read by the same import as `soup`); `None` for a static model.
     pub animation: Option<Playback>,
+    /// How far the latest voxelization job got (shared with the job; cancelling it stops the job).
+    pub progress: Progress,
+    /// The preview tile's mesh for a file too big to show through Bevy's glTF loader without a stall (the
+    /// surface of its first voxels, built off the main thread); `None`: the tile shows `gltf`.
+    pub tile_mesh: Option<Handle<Mesh>>,
     /// Something of the file that is not shown, and why (an animation the core refuses: the model shows still).
     pub warning: Option<String>,
 }
@@ -91,6 +97,8 @@ impl ModelEntry {
             voxels: None,
             voxels_generation: None,
             voxelize_ms: 0.0,
+            progress: Progress::default(),
+            tile_mesh: None,
             animation: None,
             warning: None,
         }

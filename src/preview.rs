@@ -1,6 +1,7 @@
 //! Preview viewports: each model's original glTF in a small viewport along the right edge, with its own
 //! camera, render layer and soft coloured background, turning slowly; clicking one picks that model. An
-//! animated model's tile plays its clip (`play`).
+//! animated model's tile plays its clip (`play`). A file too big for Bevy's glTF loader
+//! ([`TILE_TRIANGLES`](crate::voxelize::TILE_TRIANGLES)) shows the surface of its voxels instead.
 
 mod play;
 
@@ -11,11 +12,11 @@ use bevy::color::Hsla;
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
-use bevy::world_serialization::WorldAssetRoot;
+use bevy::world_serialization::{WorldAsset, WorldAssetRoot};
 
 use crate::input::PointerOverUi;
 use crate::library::LibraryRequest;
-use crate::model::{ModelLibrary, ModelStatus};
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use crate::schedule::PreviewSystems;
 
 /// Previews get render layers 1..=MAX_PREVIEWS (layer 0 is the stage).
@@ -57,11 +58,20 @@ fn setup_light(mut commands: Commands) {
     ));
 }
 
-/// Spawns a camera and the original scene for every loaded model that has none yet.
+/// What a tile shows: the original glTF scene, or for a big file the surface of its voxels.
+enum TileContent {
+    Scene(Handle<WorldAsset>),
+    Surface(Handle<Mesh>),
+}
+
+/// Spawns a camera and the original scene (or a big file's voxel surface) for every loaded model that has none
+/// yet.
 fn spawn_previews(
     mut commands: Commands,
     library: Res<ModelLibrary>,
     gltfs: Res<Assets<Gltf>>,
+    models: Res<Assets<VoxelModelAsset>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
     cameras: Query<&PreviewCamera>,
 ) {
     let n = library.entries.len().min(MAX_PREVIEWS);
@@ -69,8 +79,21 @@ fn spawn_previews(
         if cameras.iter().any(|c| c.0 == i) || matches!(entry.status, ModelStatus::Loading | ModelStatus::Failed(_)) {
             continue;
         }
-        let (Some(gltf), Some(soup)) = (gltfs.get(&entry.gltf), entry.soup.as_ref()) else { continue };
-        let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
+        let Some(soup) = entry.soup.as_ref() else { continue };
+        let (content, (lo, hi)) = match (&entry.tile_mesh, gltfs.get(&entry.gltf)) {
+            (Some(mesh), _) => {
+                // The surface is in the voxels' normalized space: fit their grid.
+                let Some(model) = entry.latest(&models) else { continue };
+                let spec = &model.spec;
+                let hi = std::array::from_fn(|a| spec.origin[a] + spec.dims[a] as f32 * spec.cell[a]);
+                (TileContent::Surface(mesh.clone()), (spec.origin, hi))
+            }
+            (None, Some(gltf)) => {
+                let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
+                (TileContent::Scene(scene), soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3])))
+            }
+            (None, None) => continue,
+        };
         let layer = RenderLayers::layer(i + 1);
         let hue = i as f32 / n.max(1) as f32 * 360.0;
         commands.spawn((
@@ -86,21 +109,23 @@ fn spawn_previews(
             layer.clone(),
         ));
         // Fit the model in a unit-ish sphere: scale its diagonal to 2.4 and centre it.
-        let (lo, hi) = soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3]));
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let scale = 2.4 / (hi - lo).length().max(1e-6);
-        commands
-            .spawn((
-                Name::new(format!("preview {i}")),
-                PreviewModel(i),
-                Transform::default(),
-                Visibility::default(),
-                Propagate(layer),
-            ))
-            .with_child((
-                WorldAssetRoot(scene),
-                Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale),
-            ));
+        let fit = Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale);
+        let mut root = commands.spawn((
+            Name::new(format!("preview {i}")),
+            PreviewModel(i),
+            Transform::default(),
+            Visibility::default(),
+            Propagate(layer),
+        ));
+        match content {
+            TileContent::Scene(scene) => root.with_child((WorldAssetRoot(scene), fit)),
+            TileContent::Surface(mesh) => {
+                let material = materials.add(StandardMaterial { perceptual_roughness: 0.8, ..default() });
+                root.with_child((Mesh3d(mesh), MeshMaterial3d(material), fit))
+            }
+        };
     }
 }
 

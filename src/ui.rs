@@ -15,12 +15,21 @@ use crate::record::RecordStatus;
 use crate::settings::{PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
-fn status_mark(status: &ModelStatus) -> &'static str {
-    match status {
-        ModelStatus::Loading => "  (loading…)",
-        ModelStatus::Voxelizing => "  (voxelizing…)",
-        ModelStatus::Ready => "",
-        ModelStatus::Failed(_) => "  ⚠ failed",
+fn status_mark(entry: &ModelEntry) -> String {
+    match entry.status {
+        ModelStatus::Loading | ModelStatus::Voxelizing => format!("  ({})", job_stage(entry)),
+        ModelStatus::Ready => String::new(),
+        ModelStatus::Failed(_) => "  ⚠ failed".into(),
+    }
+}
+
+/// What a loading or voxelizing model's job is doing, e.g. "filling, 60 %".
+fn job_stage(entry: &ModelEntry) -> String {
+    let stage = entry.progress.stage();
+    match stage {
+        voxel_core::Stage::Waiting if entry.status == ModelStatus::Loading => "loading…".into(),
+        voxel_core::Stage::Waiting => "voxelizing…".into(),
+        _ => format!("{}, {:.0} %", stage.label(), stage.fraction() * 100.0),
     }
 }
 
@@ -32,7 +41,7 @@ const AMBER: egui::Color32 = egui::Color32::from_rgb(190, 120, 0);
 /// A model's line in the list: its name and state; red when it failed, amber with a ⚠ when part of the file is
 /// not shown; and the hover text saying why.
 fn entry_label(entry: &ModelEntry) -> (String, Option<egui::Color32>, Option<&str>) {
-    let label = format!("{}{}", entry.name, status_mark(&entry.status));
+    let label = format!("{}{}", entry.name, status_mark(entry));
     match (&entry.status, &entry.warning) {
         (ModelStatus::Failed(reason), _) => (label, Some(RED), Some(reason)),
         (_, Some(warning)) => (format!("{label}  ⚠"), Some(AMBER), Some(warning)),
@@ -151,7 +160,7 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         ModelStatus::Loading | ModelStatus::Voxelizing => {
             ui.horizontal(|ui| {
                 ui.spinner();
-                ui.label(if entry.status == ModelStatus::Loading { "loading…" } else { "voxelizing…" });
+                ui.label(job_stage(entry));
             });
         }
         ModelStatus::Failed(reason) => {
@@ -173,9 +182,14 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
             "grid {}×{}×{}, {} triangles, {} colours",
             s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
         ));
-        ui.label(format!("voxelized in {:.1} ms", entry.voxelize_ms));
+        ui.label(format!("voxelized in {:.1} ms, {}", entry.voxelize_ms, megabytes(model.memory_bytes())));
     }
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));
+}
+
+/// A byte count for the panel, e.g. "1.4 MB of voxel data".
+fn megabytes(bytes: usize) -> String {
+    format!("{:.1} MB of voxel data", bytes as f64 / 1e6)
 }
 
 /// What the panel's Export and Record buttons read and send.

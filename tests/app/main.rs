@@ -2,6 +2,7 @@
 
 mod ambiguity;
 mod animation;
+mod big;
 mod cli;
 mod common;
 mod export;

@@ -53,7 +53,7 @@ pub(crate) fn normalize(raw: f64, ty: DataType) -> f64 {
 /// view's stride.
 fn strided_bytes<'b>(
     view: &View<'_>,
-    buffers: &'b Buffers,
+    buffers: &'b Buffers<'_>,
     offset: usize,
     count: usize,
     elem: usize,
@@ -82,7 +82,7 @@ fn strided_bytes<'b>(
 #[allow(clippy::too_many_arguments)]
 fn read_strided(
     view: &View<'_>,
-    buffers: &Buffers,
+    buffers: &Buffers<'_>,
     offset: usize,
     count: usize,
     ncomp: usize,
@@ -107,7 +107,7 @@ fn read_strided(
 /// on big-endian targets): [`read_accessor`] reads those.
 fn read_plain<'b, T: bytemuck::Pod>(
     accessor: &Accessor<'_>,
-    buffers: &'b Buffers,
+    buffers: &'b Buffers<'_>,
     data_type: DataType,
     ncomp: usize,
     what: &str,
@@ -133,7 +133,7 @@ fn read_plain<'b, T: bytemuck::Pod>(
 /// [`read_plain`] for `N` f32 components an element.
 pub(crate) fn read_plain_f32<'b, const N: usize>(
     accessor: &Accessor<'_>,
-    buffers: &'b Buffers,
+    buffers: &'b Buffers<'_>,
     what: &str,
 ) -> Result<Option<Cow<'b, [[f32; N]]>>> {
     read_plain(accessor, buffers, DataType::F32, N, what)
@@ -141,7 +141,7 @@ pub(crate) fn read_plain_f32<'b, const N: usize>(
 
 /// Reads an accessor as a flat list of f64 components (`count * components` values), applying sparse
 /// substitutions. Returns the values and the number of components per element.
-pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers, what: &str) -> Result<(Vec<f64>, usize)> {
+pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers<'_>, what: &str) -> Result<(Vec<f64>, usize)> {
     let ncomp = component_count(accessor.dimensions());
     let ty = accessor.data_type();
     let count = accessor.count();
@@ -184,7 +184,7 @@ pub(crate) fn read_accessor(accessor: &Accessor<'_>, buffers: &Buffers, what: &s
 /// Reads an accessor of exactly `N` components per element (as f32).
 pub(crate) fn read_vecs<const N: usize>(
     accessor: &Accessor<'_>,
-    buffers: &Buffers,
+    buffers: &Buffers<'_>,
     what: &str,
 ) -> Result<Vec<[f32; N]>> {
     if let Some(values) = read_plain_f32(accessor, buffers, what)? {
@@ -203,7 +203,11 @@ pub(crate) fn to_vecs<const N: usize>(values: &[f64], ncomp: usize, what: &str) 
 }
 
 /// Reads an index accessor (unsigned integers, one component): plain `u32` indices as they are in the buffer.
-pub(crate) fn read_indices<'b>(accessor: &Accessor<'_>, buffers: &'b Buffers, what: &str) -> Result<Cow<'b, [u32]>> {
+pub(crate) fn read_indices<'b>(
+    accessor: &Accessor<'_>,
+    buffers: &'b Buffers<'_>,
+    what: &str,
+) -> Result<Cow<'b, [u32]>> {
     if !matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32) || accessor.normalized() {
         return Err(VoxelError::Invalid(format!("{what}: indices must be unsigned integers")));
     }

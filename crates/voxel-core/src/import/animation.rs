@@ -119,7 +119,7 @@ fn identity_trs() -> Trs {
 }
 
 /// A skin's joints and inverse bind matrices (identity when absent).
-fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
+fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers<'_>) -> Result<Skin> {
     let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
     let what = format!("skin {}", skin.index());
     let inverse_bind = match skin.inverse_bind_matrices() {
@@ -143,7 +143,11 @@ fn read_skin(skin: &gltf::Skin<'_>, buffers: &Buffers) -> Result<Skin> {
 }
 
 /// A decoded primitive with its morph-target position deltas and skin influences.
-fn read_primitive(decoded: &DecodedPrimitive<'_>, prim: &gltf::Primitive<'_>, buffers: &Buffers) -> Result<Primitive> {
+fn read_primitive(
+    decoded: &DecodedPrimitive<'_>,
+    prim: &gltf::Primitive<'_>,
+    buffers: &Buffers<'_>,
+) -> Result<Primitive> {
     let name = &decoded.name;
     let count = decoded.positions.len();
     let targets = prim
@@ -204,7 +208,7 @@ fn read_primitive(decoded: &DecodedPrimitive<'_>, prim: &gltf::Primitive<'_>, bu
 }
 
 /// One animation: its channels' samplers, checked against their nodes.
-fn read_clip(animation: &gltf::Animation<'_>, nodes: &[Node], buffers: &Buffers) -> Result<Clip> {
+fn read_clip(animation: &gltf::Animation<'_>, nodes: &[Node], buffers: &Buffers<'_>) -> Result<Clip> {
     let name = animation.name().map_or_else(|| format!("animation {}", animation.index()), str::to_owned);
     let mut channels = Vec::new();
     for (k, channel) in animation.channels().enumerate() {

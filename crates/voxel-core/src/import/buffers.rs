@@ -1,9 +1,11 @@
 //! The document's buffers, and the bytes of each buffer view: checked against their buffer, or decoded from
 //! EXT_meshopt_compression (all modes and filters, via `meshoptimizer-rs`), whose fallback buffers are never
-//! read.
+//! read. A GLB's binary chunk is borrowed from the file's bytes, not copied.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use meshoptimizer_rs::codec::{Filter, Mode, decode_buffer_view};
 use meshoptimizer_rs::{Limits, Workspace};
@@ -17,11 +19,13 @@ const MESHOPT: &str = "EXT_meshopt_compression";
 const MAX_DECODED_VIEW: usize = 1 << 29;
 
 /// The buffers of a document and the decoded bytes of its meshopt-compressed views.
-pub(crate) struct Buffers {
-    /// Buffer contents by buffer index (a meshopt fallback buffer is empty).
-    pub data: Vec<gltf::buffer::Data>,
+pub(crate) struct Buffers<'a> {
+    /// Buffer contents by buffer index, padded to a multiple of 4 bytes (a meshopt fallback buffer is empty).
+    data: Vec<Cow<'a, [u8]>>,
     /// Decoded bytes of compressed buffer views, by view index.
     decoded: HashMap<usize, Vec<u8>>,
+    /// The buffers as the `gltf` crate's image decoder takes them (copies), made for the first image in a view.
+    owned: OnceLock<Vec<gltf::buffer::Data>>,
 }
 
 /// The EXT_meshopt_compression object of a buffer view.
@@ -48,18 +52,35 @@ fn is_meshopt_fallback(buffer: &gltf::Buffer<'_>) -> bool {
     buffer.extension_value(MESHOPT).and_then(|e| e.get("fallback")).and_then(|f| f.as_bool()) == Some(true)
 }
 
-impl Buffers {
-    /// Loads every buffer (GLB blob, data URI or file next to `base_dir`), then decodes compressed views.
-    pub fn load(document: &gltf::Document, base_dir: Option<&Path>, mut blob: Option<Vec<u8>>) -> Result<Self> {
+/// `bytes` padded with zeros to a multiple of 4 bytes (as the `gltf` crate pads every buffer), borrowed when
+/// they need none.
+fn padded(bytes: Cow<'_, [u8]>) -> Cow<'_, [u8]> {
+    if bytes.len().is_multiple_of(4) {
+        return bytes;
+    }
+    let mut bytes = bytes.into_owned();
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    Cow::Owned(bytes)
+}
+
+impl<'a> Buffers<'a> {
+    /// Loads every buffer (the GLB's binary chunk `blob`, a data URI or a file next to `base_dir`), then decodes
+    /// compressed views.
+    pub fn load(document: &gltf::Document, base_dir: Option<&Path>, mut blob: Option<Cow<'a, [u8]>>) -> Result<Self> {
         let mut data = Vec::new();
         for buffer in document.buffers() {
             let what = format!("buffer {}", buffer.index());
             if is_meshopt_fallback(&buffer) {
-                data.push(gltf::buffer::Data(Vec::new()));
+                data.push(Cow::Borrowed(&[][..]));
                 continue;
             }
-            let bytes = gltf::buffer::Data::from_source_and_blob(buffer.source(), base_dir, &mut blob)
-                .map_err(|e| VoxelError::MissingData(format!("{what}: {e}")))?;
+            let source = buffer.source();
+            let bytes = match matches!(source, gltf::buffer::Source::Bin).then(|| blob.take()).flatten() {
+                Some(bin) => padded(bin),
+                None => gltf::buffer::Data::from_source(source, base_dir)
+                    .map(|data| Cow::Owned(data.0))
+                    .map_err(|e| VoxelError::MissingData(format!("{what}: {e}")))?,
+            };
             if bytes.len() < buffer.length() {
                 return Err(VoxelError::MissingData(format!(
                     "{what}: {} bytes where the file declares {}",
@@ -69,7 +90,7 @@ impl Buffers {
             }
             data.push(bytes);
         }
-        let mut buffers = Self { data, decoded: HashMap::new() };
+        let mut buffers = Self { data, decoded: HashMap::new(), owned: OnceLock::new() };
         let mut workspace = Workspace::new(Limits { max_bytes: MAX_DECODED_VIEW, ..Limits::default() });
         for view in document.views() {
             if let Some(ext) = view.extension_value(MESHOPT) {
@@ -78,6 +99,11 @@ impl Buffers {
             }
         }
         Ok(buffers)
+    }
+
+    /// Copies of the buffers, for the `gltf` crate's image decoder (made once, when first asked for).
+    pub fn owned(&self) -> &[gltf::buffer::Data] {
+        self.owned.get_or_init(|| self.data.iter().map(|bytes| gltf::buffer::Data(bytes.to_vec())).collect())
     }
 
     /// The bytes of `view`: decoded if compressed, else its range of its buffer (checked).

@@ -42,7 +42,7 @@ impl DracoPrimitive {
     pub fn decode(
         prim: &gltf::Primitive<'_>,
         document: &gltf::Document,
-        buffers: &Buffers,
+        buffers: &Buffers<'_>,
         what: &str,
     ) -> Result<Option<Self>> {
         let Some(ext) = prim.extension_value(DRACO) else { return Ok(None) };

@@ -86,17 +86,21 @@ fn to_rgba8(data: &gltf::image::Data) -> Result<Vec<[u8; 4]>> {
 }
 
 /// Decodes `image` (embedded, data URI or a file next to `base_dir`) to an RGBA8 texture.
-fn decode(image: &gltf::Image<'_>, base_dir: Option<&Path>, buffers: &Buffers) -> Result<Arc<Texture>> {
+fn decode(image: &gltf::Image<'_>, base_dir: Option<&Path>, buffers: &Buffers<'_>) -> Result<Arc<Texture>> {
     if let Some(webp) = super::webp::decode_if_webp(image, base_dir, buffers) {
         return webp.map(Arc::new);
     }
     let source = image.source();
-    if let gltf::image::Source::View { view, .. } = &source {
-        // The gltf crate slices the buffer unchecked (and never sees decoded meshopt views).
-        let what = format!("image {} in buffer view {}", image.index(), view.index());
-        buffers.buffer_range(view.buffer().index(), view.offset(), view.length(), &what)?;
-    }
-    let data = gltf::image::Data::from_source(source, base_dir, &buffers.data)
+    let buffer_data = match &source {
+        gltf::image::Source::View { view, .. } => {
+            // The gltf crate slices the buffer unchecked (and never sees decoded meshopt views).
+            let what = format!("image {} in buffer view {}", image.index(), view.index());
+            buffers.buffer_range(view.buffer().index(), view.offset(), view.length(), &what)?;
+            buffers.owned()
+        }
+        gltf::image::Source::Uri { .. } => &[],
+    };
+    let data = gltf::image::Data::from_source(source, base_dir, buffer_data)
         .map_err(|e| VoxelError::MissingData(format!("image {}: {e}", image.index())))?;
     Ok(Arc::new(Texture::new(data.width, data.height, to_rgba8(&data)?)?))
 }
@@ -111,7 +115,7 @@ impl MaterialCache {
         &mut self,
         soup: &mut TriangleSoup,
         material: &gltf::Material<'_>,
-        buffers: &Buffers,
+        buffers: &Buffers<'_>,
     ) -> Result<(usize, Option<TexCoordSet>)> {
         if let Some(&hit) = self.by_gltf_index.get(&material.index()) {
             return Ok(hit);
@@ -142,7 +146,7 @@ impl MaterialCache {
 
     /// Decodes, on the thread pool, the base-colour images of `primitives` (a failure is reported when a
     /// material that uses the image is resolved, as without this).
-    pub fn prefetch<'a>(&mut self, primitives: impl Iterator<Item = gltf::Primitive<'a>>, buffers: &Buffers) {
+    pub fn prefetch<'a>(&mut self, primitives: impl Iterator<Item = gltf::Primitive<'a>>, buffers: &Buffers<'_>) {
         let mut wanted: Vec<gltf::Image<'_>> = primitives
             .filter_map(|prim| prim.material().pbr_metallic_roughness().base_color_texture())
             .map(|info| info.texture().source())
@@ -162,7 +166,7 @@ impl MaterialCache {
     }
 
     /// The texture of `image`: prefetched, else decoded now.
-    fn image(&mut self, image: &gltf::Image<'_>, buffers: &Buffers) -> Result<Arc<Texture>> {
+    fn image(&mut self, image: &gltf::Image<'_>, buffers: &Buffers<'_>) -> Result<Arc<Texture>> {
         let texture = match self.images.remove(&image.index()) {
             Some(decoded) => decoded?,
             None => decode(image, self.base_dir.as_deref(), buffers)?,

@@ -33,7 +33,7 @@ pub(super) fn import_with<T>(
     base_dir: Option<&Path>,
     finish: impl FnOnce(&gltf::Document, SoupBuilder<'_>) -> Result<T>,
 ) -> Result<T> {
-    let gltf::Gltf { document, blob } = validate::parse(bytes)?;
+    let (document, blob) = validate::parse(bytes)?;
     let document = validate::check(document)?;
     let buffers = Buffers::load(&document, base_dir, blob)?;
     let mut builder = SoupBuilder {
@@ -60,7 +60,8 @@ pub(super) fn import_with<T>(
     if builder.soup.triangle_count() == 0 {
         return Err(VoxelError::Empty(" (the default scene has no triangle meshes)".into()));
     }
-    builder.soup.validate()?;
+    // No `TriangleSoup::validate` scan of every corner here: parts and materials are made consistent, and the
+    // positions were checked finite where they were placed (`add_mesh`).
     finish(&document, builder)
 }
 
@@ -109,6 +110,21 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
     Ok(out)
 }
 
+/// `positions` placed by `transform`, in f64 and rounded back to f32. The identity (most big files: one node)
+/// only turns -0.0 into +0.0, as `c + 0.0` does: without a -0.0 the positions are borrowed as they are, bit
+/// for bit what the f64 path gives.
+fn world_positions<'p>(positions: &'p [[f32; 3]], transform: &DMat4) -> Cow<'p, [[f32; 3]]> {
+    if *transform == DMat4::IDENTITY {
+        let negative_zero = |c: &f32| c.to_bits() == (-0.0f32).to_bits();
+        if !positions.as_flattened().iter().any(negative_zero) {
+            return Cow::Borrowed(positions);
+        }
+        return Cow::Owned(positions.par_iter().map(|p| p.map(|c| c + 0.0)).collect());
+    }
+    let place = |p: &[f32; 3]| transform.transform_point3(DVec3::from(p.map(f64::from))).as_vec3().to_array();
+    Cow::Owned(positions.par_iter().map(place).collect())
+}
+
 /// Whether `prim` draws triangles (points and lines have no surface to voxelize).
 fn has_surface(prim: &gltf::Primitive<'_>) -> bool {
     !matches!(prim.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip)
@@ -140,7 +156,7 @@ pub(super) struct SoupBuilder<'a> {
     pub(super) soup: TriangleSoup,
     materials: MaterialCache,
     document: &'a gltf::Document,
-    pub(super) buffers: &'a Buffers,
+    pub(super) buffers: &'a Buffers<'a>,
     /// Decoded primitives per mesh index, so a mesh used by several nodes is read once.
     pub(super) parts_of_mesh: HashMap<usize, Vec<DecodedPrimitive<'a>>>,
     /// Where each part came from.
@@ -192,13 +208,11 @@ impl<'a> SoupBuilder<'a> {
             let first_vertex = self.soup.vertices().len();
             self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
-            let world: Vec<[f32; 3]> = prim
-                .positions
-                .par_iter()
-                .map(|p| {
-                    transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())).as_vec3().to_array()
-                })
-                .collect();
+            let world = world_positions(&prim.positions, transform);
+            // Placed positions can overflow (borrowed ones were checked when decoded).
+            if matches!(world, Cow::Owned(_)) && world.as_flattened().iter().any(|c| !c.is_finite()) {
+                return Err(VoxelError::NonFinite(prim.name.clone()));
+            }
             let vertices =
                 IndexedVertices { positions: &world, uvs: prim.uvs.as_deref(), colors: prim.colors.as_deref() };
             self.soup.push_indexed_triangles(part, &vertices, prim.triangles());

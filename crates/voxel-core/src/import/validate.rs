@@ -2,6 +2,8 @@
 //! of its validation hooks) index and unwrap freely, so everything they would follow is checked here first and
 //! reported as a [`VoxelError`] naming what is wrong.
 
+use std::borrow::Cow;
+
 use gltf::json::validation::{Error as Problem, Validate};
 use gltf::json::{Path as JsonPath, Root};
 
@@ -46,8 +48,9 @@ fn is_gltf1(json: &serde_json::Value) -> bool {
         || ["meshes", "accessors", "nodes", "buffers"].iter().any(|key| json.get(key).is_some_and(|v| v.is_object()))
 }
 
-/// Parses glTF or GLB bytes without the `gltf` crate's validation (see [`check`]).
-pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf> {
+/// Parses glTF or GLB bytes without the `gltf` crate's validation (see [`check`]): the document, and a GLB's
+/// binary chunk, borrowed from `bytes` (not copied).
+pub(super) fn parse(bytes: &[u8]) -> Result<(gltf::Document, Option<Cow<'_, [u8]>>)> {
     // The gltf crate subtracts the 12-byte header from the GLB's declared length unchecked.
     if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
         let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
@@ -55,21 +58,33 @@ pub(super) fn parse(bytes: &[u8]) -> Result<gltf::Gltf> {
             return Err(VoxelError::Parse(format!("corrupt GLB (its header declares a length of {length} bytes)")));
         }
     }
-    match gltf::Gltf::from_slice_without_validation(bytes) {
-        Ok(gltf) => {
-            let version = &gltf.document.as_json().asset.version;
-            if version.starts_with("1.") || version == "1" { Err(gltf1_error()) } else { Ok(gltf) }
-        }
-        Err(gltf::Error::Binary(gltf::binary::Error::Version(1))) => Err(gltf1_error()),
-        Err(gltf::Error::Binary(b)) => Err(VoxelError::Parse(format!("corrupt or truncated GLB ({b:?})"))),
-        Err(gltf::Error::Deserialize(d)) => {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| parse_error(e, bytes))?;
+        (glb.json, glb.bin)
+    } else {
+        (Cow::Borrowed(bytes), None)
+    };
+    let root = Root::from_slice(&json).map_err(|e| parse_error(gltf::Error::Deserialize(e), bytes))?;
+    let version = &root.asset.version;
+    if version.starts_with("1.") || version == "1" {
+        return Err(gltf1_error());
+    }
+    Ok((gltf::Document::from_json_without_validation(root), blob))
+}
+
+/// The error for a document the `gltf` crate cannot read: glTF 1.0, a corrupt GLB or bad JSON.
+fn parse_error(error: gltf::Error, bytes: &[u8]) -> VoxelError {
+    match error {
+        gltf::Error::Binary(gltf::binary::Error::Version(1)) => gltf1_error(),
+        gltf::Error::Binary(b) => VoxelError::Parse(format!("corrupt or truncated GLB ({b:?})")),
+        gltf::Error::Deserialize(d) => {
             if serde_json::from_slice::<serde_json::Value>(bytes).is_ok_and(|json| is_gltf1(&json)) {
-                Err(gltf1_error())
+                gltf1_error()
             } else {
-                Err(VoxelError::Parse(format!("JSON: {d}")))
+                VoxelError::Parse(format!("JSON: {d}"))
             }
         }
-        Err(other) => Err(VoxelError::Parse(other.to_string())),
+        other => VoxelError::Parse(other.to_string()),
     }
 }
 

@@ -53,7 +53,7 @@ fn is_webp(source: &gltf::image::Source<'_>) -> bool {
 pub(super) fn decode_if_webp(
     image: &gltf::Image<'_>,
     base_dir: Option<&Path>,
-    buffers: &Buffers,
+    buffers: &Buffers<'_>,
 ) -> Option<Result<Texture>> {
     let source = image.source();
     if !is_webp(&source) {

@@ -12,6 +12,8 @@ mod export;
 mod fine;
 mod gltf_export;
 mod meshopt;
+mod progress;
+mod read;
 mod scale;
 mod shapes;
 mod webp;
