@@ -70,7 +70,7 @@ fn cursor_ray(
 }
 
 pub(super) fn plugin(app: &mut App) {
-    app.add_systems(Update, cursor_ray.in_set(crate::schedule::AppSystems::Input).after(crate::input::track_pointer));
+    app.add_systems(Update, cursor_ray.in_set(crate::schedule::InputSystems::Ray));
     app.add_plugins(PanOrbitCameraPlugin);
     // The panel is an egui Panel: hovering it must already stop the camera.
     app.insert_resource(EguiFocusIncludesHover(true));

@@ -16,7 +16,7 @@ use voxel_core::{TriangleSoup, VoxelError, VoxelizeOptions, voxelize_within};
 
 use crate::model::playback::POSES_PER_SECOND;
 use crate::model::{ModelLibrary, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::ExportSystems;
 use crate::settings::{ColorSettings, Style, VoxelSettings};
 
 /// The folder exports go to when `--export-dir` is not given.
@@ -64,10 +64,6 @@ impl ExportStatus {
         }
     }
 }
-
-/// The export systems (in `AppSystems::Simulate`, after voxelization: an export sees this frame's voxels).
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct ExportSystems;
 
 /// The export being written.
 #[derive(Resource, Default)]
@@ -169,5 +165,5 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<ExportStatus>();
     app.init_resource::<ExportJob>();
     app.add_message::<ExportRequest>();
-    app.add_systems(Update, (start_export, finish_export).chain().in_set(AppSystems::Simulate).in_set(ExportSystems));
+    app.add_systems(Update, (start_export.in_set(ExportSystems::Start), finish_export.in_set(ExportSystems::Finish)));
 }

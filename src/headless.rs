@@ -23,7 +23,10 @@ pub fn headless_app(args: &AppArgs) -> App {
         bevy::world_serialization::WorldSerializationPlugin,
         bevy::gltf::GltfPlugin::default(),
     ));
+    // The asset types the renderer's plugins would register (the voxel material and its buffer included).
     app.init_asset::<StandardMaterial>();
+    app.init_asset::<crate::instancing::VoxelMaterial>();
+    app.init_asset::<bevy::render::storage::ShaderBuffer>();
     app.insert_resource(CompressedImageFormatSupport(CompressedImageFormats::NONE));
     app.init_resource::<ButtonInput<KeyCode>>();
     app.init_resource::<ButtonInput<MouseButton>>();

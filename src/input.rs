@@ -10,7 +10,7 @@ use bevy::window::PrimaryWindow;
 use crate::animation::AnimationRequest;
 use crate::export::ExportRequest;
 use crate::library::LibraryRequest;
-use crate::schedule::AppSystems;
+use crate::schedule::InputSystems;
 use crate::settings::{PanelOpen, RepelSettings, Style};
 
 /// A press shorter than this (and without dragging) is a click, not an orbit.
@@ -221,5 +221,13 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<StageClick>();
     app.add_message::<ToggleFall>();
     app.add_message::<ToggleRecord>();
-    app.add_systems(Update, (track_pointer, keys, clicks, click_to_next).chain().in_set(AppSystems::Input));
+    app.add_systems(
+        Update,
+        (
+            track_pointer.in_set(InputSystems::Track),
+            keys.in_set(InputSystems::Keys),
+            clicks.in_set(InputSystems::Clicks),
+            click_to_next.in_set(InputSystems::ClickToNext),
+        ),
+    );
 }

@@ -21,6 +21,7 @@ pub mod input;
 pub mod instancing;
 pub mod library;
 pub mod model;
+pub mod noop;
 pub mod palette;
 mod preview;
 pub mod record;
@@ -47,7 +48,7 @@ pub struct LogicPlugin;
 impl Plugin for LogicPlugin {
     fn build(&self, app: &mut App) {
         app.add_plugins((
-            schedule::plugin,
+            schedule::SchedulePlugin,
             settings::plugin,
             library::plugin,
             voxelize::plugin,
@@ -59,14 +60,6 @@ impl Plugin for LogicPlugin {
             export::plugin,
             palette::plugin,
         ));
-        // The library reads files before voxelization picks them up, animation poses what voxelization read, the
-        // pool grows for the pose and exports save what they made (no plugin names another).
-        app.configure_sets(
-            Update,
-            (library::LibrarySystems, voxelize::VoxelizeSystems, animation::AnimationSystems, export::ExportSystems)
-                .chain(),
-        );
-        app.configure_sets(Update, animation::AnimationSystems.before(instancing::InstancingSystems));
     }
 
     fn cleanup(&self, app: &mut App) {
@@ -74,7 +67,7 @@ impl Plugin for LogicPlugin {
     }
 }
 
-/// The whole app on top of `DefaultPlugins`.
+/// The whole app: Bevy's `DefaultPlugins` with the window, then the [`ShowPlugin`].
 pub struct AppPlugin {
     /// Parsed command line.
     pub args: config::AppArgs,
@@ -103,8 +96,21 @@ impl Plugin for AppPlugin {
                     ..default()
                 }),
         );
+        app.add_plugins(ShowPlugin { args: self.args.clone() });
+    }
+}
+
+/// The app over Bevy's default plugins, whatever their window and renderer: the command line's starting
+/// resources, the render side (voxel material and buffer, stage, camera, panel, previews, screenshot, recording)
+/// and the [`LogicPlugin`].
+pub struct ShowPlugin {
+    /// Parsed command line.
+    pub args: config::AppArgs,
+}
+
+impl Plugin for ShowPlugin {
+    fn build(&self, app: &mut App) {
         self.args.configure(app);
-        // Render-side registration first (the voxel material's asset type comes from its MaterialPlugin).
         app.add_plugins((instancing::render_plugin, stage::plugin, camera::plugin, ui::plugin, preview::plugin));
         if let Some(screenshot) = self.args.screenshot_plugin() {
             app.add_plugins(screenshot);

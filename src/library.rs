@@ -9,7 +9,7 @@ use bevy::window::FileDragAndDrop;
 use crate::assets::{asset_root, file_asset_path};
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus};
 use crate::palette::is_palette_file;
-use crate::schedule::AppSystems;
+use crate::schedule::LibrarySystems;
 
 /// The models the list starts with (from the command line).
 #[derive(Resource, Clone, Debug)]
@@ -40,10 +40,6 @@ pub enum LibraryRequest {
     /// Add a file or folder and show (the first of) it.
     Add(PathBuf),
 }
-
-/// The library's systems (request handling, load tracking), ahead of voxelization in `AppSystems::Simulate`.
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct LibrarySystems;
 
 impl ModelLibrary {
     /// Adds the model file `path` (shown through `asset_path` in its preview); returns its index.
@@ -149,6 +145,6 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(Startup, populate);
     app.add_systems(
         Update,
-        (dropped_files, handle_requests).chain().in_set(AppSystems::Simulate).in_set(LibrarySystems),
+        (dropped_files.in_set(LibrarySystems::Drop), handle_requests.in_set(LibrarySystems::Request)),
     );
 }

@@ -14,7 +14,7 @@ use voxel_core::palette::Palette;
 
 use crate::animation::PosePlaced;
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::PaletteSystems;
 use crate::settings::ColorSettings;
 
 /// The extensions of palette files (a file dropped with one of them is a palette, not a model).
@@ -100,5 +100,5 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<FileDragAndDrop>();
     app.add_message::<Recolored>();
     app.add_message::<PosePlaced>();
-    app.add_systems(Update, (read_dropped, recolor).chain().in_set(AppSystems::Color));
+    app.add_systems(Update, (read_dropped.in_set(PaletteSystems::Read), recolor.in_set(PaletteSystems::Recolor)));
 }

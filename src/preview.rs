@@ -20,6 +20,7 @@ use bevy::world_serialization::{WorldAsset, WorldAssetRoot};
 use crate::input::PointerOverUi;
 use crate::library::LibraryRequest;
 use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
+use crate::schedule::PreviewSystems;
 
 /// Previews get render layers 1..=MAX_PREVIEWS (layer 0 is the stage).
 pub const MAX_PREVIEWS: usize = 24;
@@ -187,10 +188,14 @@ fn pick(
 pub(super) fn plugin(app: &mut App) {
     app.add_plugins(HierarchyPropagatePlugin::<RenderLayers>::new(PostUpdate));
     app.add_systems(Startup, setup_light);
-    app.add_systems(Update, pick.in_set(crate::schedule::AppSystems::Pointer));
     app.add_systems(
         Update,
-        (spawn_previews, layout_and_turn, play::systems()).chain().in_set(crate::schedule::AppSystems::Present),
+        (
+            pick.in_set(PreviewSystems::Pick),
+            spawn_previews.in_set(PreviewSystems::Spawn),
+            layout_and_turn.in_set(PreviewSystems::Layout),
+            play::systems(),
+        ),
     );
 }
 

@@ -143,8 +143,6 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<SettingDrag>();
     app.init_resource::<VoxelSettings>();
     app.init_resource::<ColorSettings>();
-    // The starting style may have been set by the command line already (`AppArgs::configure`).
-    if !app.world().contains_resource::<State<Style>>() {
-        app.init_state::<Style>();
-    }
+    // The default style; the command line's (`AppArgs::configure`) replaces it whether it comes before or after.
+    app.init_state::<Style>();
 }

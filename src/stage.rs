@@ -10,6 +10,7 @@ use bevy::prelude::*;
 use crate::camera::MainCamera;
 use crate::instancing::{VoxelPool, floor_height};
 use crate::model::VoxelModelAsset;
+use crate::schedule::StageSystems;
 
 /// Top colour of the background gradient (pink to lilac, like the article's demo).
 pub const GRADIENT_TOP: Color = Color::srgb(0.99, 0.80, 0.86);
@@ -176,5 +177,5 @@ fn place_floor(
 pub(super) fn plugin(app: &mut App) {
     // PostStartup: the camera (spawned in Startup) exists, so the backdrop can hang from it.
     app.add_systems(PostStartup, setup);
-    app.add_systems(Update, (follow_camera, place_floor).chain().in_set(crate::schedule::AppSystems::Present));
+    app.add_systems(Update, (follow_camera.in_set(StageSystems::Lights), place_floor.in_set(StageSystems::Floor)));
 }

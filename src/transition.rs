@@ -16,7 +16,7 @@ use bevy::ecs::system::ParallelCommands;
 use bevy::math::Mat3A;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
-use bevy_tweening::{AnimTarget, AnimationSystem, Lens, Tween, TweenAnim, TweeningPlugin};
+use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
 
 use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, drawn_count,
@@ -24,7 +24,7 @@ use crate::instancing::{
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
-use crate::schedule::AppSystems;
+use crate::schedule::TransitionSystems;
 use crate::settings::{SettingDrag, VoxelSettings};
 
 /// The article's timings (all editable in the panel).
@@ -191,10 +191,6 @@ impl VoxelTween {
         })
     }
 }
-
-/// The transition's systems (in `AppSystems::Animate`); styles run after them.
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct TransitionSystems;
 
 /// Sent when a transition begins (the voxels take off for `model`'s cells).
 #[derive(Message, Debug, Clone, PartialEq)]
@@ -598,20 +594,17 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<TransitionFinished>();
     app.add_message::<Recolored>();
     app.register_type::<TransitionSettings>();
-    if !app.is_plugin_added::<TweeningPlugin>() {
-        app.add_plugins(TweeningPlugin);
-    }
+    app.add_plugins(TweeningPlugin);
     app.add_systems(
         Update,
-        (placeholder, float_placeholder, start, pace, step, show_recolored)
-            .chain()
-            .in_set(AppSystems::Animate)
-            .in_set(TransitionSystems),
-    );
-    // bevy_tweening's one (exclusive) system steps the model-level tweens between their pace and the voxels' step.
-    app.configure_sets(
-        Update,
-        AnimationSystem::AnimationUpdate.in_set(AppSystems::Animate).in_set(TransitionSystems).after(pace).before(step),
+        (
+            placeholder.in_set(TransitionSystems::Placeholder),
+            float_placeholder.in_set(TransitionSystems::Float),
+            start.in_set(TransitionSystems::Start),
+            pace.in_set(TransitionSystems::Pace),
+            step.in_set(TransitionSystems::Step),
+            show_recolored.in_set(TransitionSystems::Recolor),
+        ),
     );
 }
 

@@ -14,14 +14,8 @@ use bevy::app::PluginsState;
 use bevy::camera::RenderTarget;
 use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
 use bevy::render::render_resource::TextureFormat;
-use bevy::render::renderer::{RenderAdapter, RenderAdapterInfo, RenderInstance, RenderQueue, WgpuWrapper};
-use bevy::render::settings::RenderCreation;
 use bevy::time::TimeUpdateStrategy;
-use bevy::window::ExitCondition;
-use bevy::winit::WinitPlugin;
-use std::sync::Arc;
 use voxel_art::instancing::VoxelPool;
 use voxel_art::model::{ModelLibrary, VoxelModelAsset};
 use voxel_art::settings::Style;
@@ -32,53 +26,12 @@ use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
 /// Frames measured per case.
 const FRAMES: usize = 300;
 
-/// A renderer on wgpu's no-op backend: the adapter's features (minus the experimental ones and the
-/// adapter-specific texture format features the no-op adapter claims but Bevy would then query), default limits.
-fn noop_renderer() -> RenderCreation {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-        backends: wgpu::Backends::NOOP,
-        backend_options: wgpu::BackendOptions { noop: wgpu::NoopBackendOptions { enable: true }, ..default() },
-        ..wgpu::InstanceDescriptor::new_without_display_handle()
-    });
-    let adapter = bevy::tasks::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-        .expect("no-op adapter");
-    let mut features = adapter.features();
-    features.remove(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-    features.remove(wgpu::Features::all_experimental_mask());
-    let (device, queue) = bevy::tasks::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: features,
-        required_limits: wgpu::Limits::default(),
-        ..default()
-    }))
-    .expect("no-op device");
-    let info = adapter.get_info();
-    RenderCreation::manual(
-        device.into(),
-        RenderQueue(Arc::new(WgpuWrapper::new(queue))),
-        RenderAdapterInfo(WgpuWrapper::new(info)),
-        RenderAdapter(Arc::new(WgpuWrapper::new(adapter))),
-        RenderInstance(Arc::new(WgpuWrapper::new(instance))),
-    )
-}
-
 /// The app's plugins with the renderer on the no-op backend, a camera rendering into an image and the key
 /// light; `models` in its library (the first shown), in `style`.
 fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
     let mut app = App::new();
-    let asset_plugin = voxel_art::assets::asset_plugin(&mut app);
-    app.add_plugins(
-        DefaultPlugins
-            .set(voxel_art::threads::task_pools())
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                close_when_requested: false,
-                ..default()
-            })
-            .set(RenderPlugin { render_creation: noop_renderer(), ..default() })
-            .set(asset_plugin)
-            .disable::<WinitPlugin>(),
-    );
+    let plugins = voxel_art::noop::default_plugins(&mut app);
+    app.add_plugins(plugins);
     let args = voxel_art::config::AppArgs { no_shipped: true, style: Some(style), ..Default::default() };
     args.configure(&mut app);
     app.add_plugins(voxel_art::instancing::render_plugin);

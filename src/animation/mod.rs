@@ -15,9 +15,8 @@ use voxel_core::{VoxelModel, VoxelizeOptions};
 
 use crate::model::playback::{PoseRequest, Rig};
 use crate::model::{ModelLibrary, Playback, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::AnimationSystems;
 use crate::settings::{ColorSettings, Style, VoxelSettings};
-use crate::transition::TransitionSystems;
 use crate::voxelize::VoxelizeGeneration;
 
 pub use follow::{CellSlots, POP_SECONDS};
@@ -46,10 +45,6 @@ pub struct AnimationStart {
     /// Start paused at this many seconds into the clip (deterministic frames for screenshots).
     pub time: Option<f32>,
 }
-
-/// The animation systems (in `AppSystems::Simulate`, after voxelization, before the pool grows).
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct AnimationSystems;
 
 /// Sent when a pose replaced the voxels of a model's pose in place (same asset, same grid).
 #[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,10 +207,12 @@ pub(super) fn plugin(app: &mut App) {
     app.add_message::<PosePlaced>();
     app.add_systems(
         Update,
-        (apply_requests, advance, finish_jobs, start_jobs)
-            .chain()
-            .in_set(AppSystems::Simulate)
-            .in_set(AnimationSystems),
+        (
+            apply_requests.in_set(AnimationSystems::Request),
+            advance.in_set(AnimationSystems::Advance),
+            finish_jobs.in_set(AnimationSystems::Finish),
+            start_jobs.in_set(AnimationSystems::Start),
+            follow::follow.in_set(AnimationSystems::Follow),
+        ),
     );
-    app.add_systems(Update, follow::follow.in_set(AppSystems::Animate).after(TransitionSystems));
 }

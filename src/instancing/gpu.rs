@@ -14,14 +14,14 @@ use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::RenderQueue;
 use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
-use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
-use bevy::transform::TransformSystems;
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp};
 use bevy::utils::Parallel;
 use bytemuck::{Pod, Zeroable};
 
 use super::material::ChunkLayout;
 use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, VoxelSlot, mesh::chunk_mesh};
 use crate::model::VoxelModelAsset;
+use crate::schedule::InstancingSystems;
 use crate::settings::VoxelSettings;
 
 /// Voxels (boxes) in one chunk's mesh.
@@ -344,12 +344,17 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<Detail>();
     app.add_systems(
         PostUpdate,
-        (rebuild_chunk_meshes, gather, choose_detail, fit_chunks).chain().after(TransformSystems::Propagate),
+        (
+            rebuild_chunk_meshes.in_set(InstancingSystems::Meshes),
+            gather.in_set(InstancingSystems::Gather),
+            choose_detail.in_set(InstancingSystems::Detail),
+            fit_chunks.in_set(InstancingSystems::Chunks),
+        ),
     );
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
     render_app.init_resource::<PendingUpload>();
     render_app.add_systems(ExtractSchedule, upload);
-    render_app.add_systems(Render, upload_pending.in_set(RenderSystems::PrepareResources));
+    render_app.add_systems(Render, upload_pending.in_set(InstancingSystems::Upload));
 }
 
 #[cfg(test)]

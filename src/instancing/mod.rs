@@ -21,7 +21,7 @@ use voxel_core::Voxel;
 
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::rng::Rng;
-use crate::schedule::AppSystems;
+use crate::schedule::InstancingSystems;
 use crate::settings::VoxelSettings;
 
 /// The voxels' shape (detailed and low detail), the chunk meshes repeating them and the material (made when
@@ -82,10 +82,6 @@ pub fn voxel_global(turn: Mat3A, scale: Vec3, translation: Vec3) -> GlobalTransf
         translation: translation.into(),
     })
 }
-
-/// The pool's systems (growing it for the model to show, in `AppSystems::Simulate` after voxelization).
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct InstancingSystems;
 
 /// A voxel entity and its index in the pool.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
@@ -255,12 +251,6 @@ fn grow_for_current(
 
 /// Logic: the pool and its layout (no GPU needed).
 pub(super) fn plugin(app: &mut App) {
-    if !app.world().contains_resource::<Assets<VoxelMaterial>>() {
-        app.init_asset::<VoxelMaterial>();
-    }
-    if !app.world().contains_resource::<Assets<ShaderBuffer>>() {
-        app.init_asset::<ShaderBuffer>();
-    }
     app.init_resource::<VoxelPool>();
     app.init_resource::<VoxelAssets>();
     app.register_type::<VoxelSlot>()
@@ -269,10 +259,7 @@ pub(super) fn plugin(app: &mut App) {
         .register_type::<Vacant>()
         .register_type::<RepelOffset>();
     app.add_systems(Startup, setup);
-    app.add_systems(
-        Update,
-        grow_for_current.in_set(AppSystems::Simulate).in_set(InstancingSystems).after(crate::voxelize::VoxelizeSystems),
-    );
+    app.add_systems(Update, grow_for_current.in_set(InstancingSystems::Grow));
 }
 
 /// Rendering: the material's pipeline, the voxel buffer and the chunks that draw it.

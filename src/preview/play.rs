@@ -10,6 +10,7 @@ use bevy::prelude::*;
 use voxel_core::AnimatedModel;
 
 use crate::model::ModelLibrary;
+use crate::schedule::PreviewSystems;
 
 use super::PreviewModel;
 
@@ -95,7 +96,7 @@ fn play_previews(
     }
 }
 
-/// The preview tiles play (after they are laid out and turned, in `AppSystems::Present`).
+/// The preview tiles play: rigged, then posed.
 pub(super) fn systems() -> bevy::ecs::schedule::ScheduleConfigs<bevy::ecs::system::ScheduleSystem> {
-    (rig_previews, play_previews).chain().into_configs()
+    (rig_previews.in_set(PreviewSystems::Rig), play_previews.in_set(PreviewSystems::Play)).into_configs()
 }

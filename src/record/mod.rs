@@ -30,7 +30,7 @@ use crate::cue::{Cue, CueParams, CueState};
 use crate::export::ExportDir;
 use crate::input::ToggleRecord;
 use crate::model::ModelLibrary;
-use crate::schedule::AppSystems;
+use crate::schedule::RecordSystems;
 
 pub use clock::FrameClock;
 pub use encoder::{FrameSender, GifFrame, GifSummary, GifWriter};
@@ -355,7 +355,15 @@ impl Plugin for RecordPlugin {
         app.init_resource::<Recorder>();
         app.init_resource::<RecordStatus>();
         app.add_systems(PostStartup, arm_headless);
-        app.add_systems(Update, (cue_headless, toggle, capture, finish).chain().in_set(AppSystems::Present));
+        app.add_systems(
+            Update,
+            (
+                cue_headless.in_set(RecordSystems::Cue),
+                toggle.in_set(RecordSystems::Toggle),
+                capture.in_set(RecordSystems::Capture),
+                finish.in_set(RecordSystems::Report),
+            ),
+        );
     }
 }
 

@@ -7,9 +7,9 @@ use bevy::prelude::*;
 use crate::input::CursorRay;
 use crate::instancing::{RepelOffset, Vacant, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
 use crate::rng::Rng;
-use crate::schedule::AppSystems;
+use crate::schedule::StyleSystems;
 use crate::settings::{RepelSettings, Style, VoxelSettings};
-use crate::transition::{ActiveTransition, TransitionSystems, VoxelTween, back_out};
+use crate::transition::{ActiveTransition, VoxelTween, back_out};
 
 use super::Settled;
 use super::repel::away_from_ray;
@@ -155,11 +155,7 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(OnExit(Style::Bubbles), take_bubbles);
     app.add_systems(
         Update,
-        (give_bubbles, burst)
-            .chain()
-            .run_if(in_state(Style::Bubbles))
-            .in_set(AppSystems::Animate)
-            .after(TransitionSystems),
+        (give_bubbles.in_set(StyleSystems::Give), burst.in_set(StyleSystems::Burst)).run_if(in_state(Style::Bubbles)),
     );
 }
 

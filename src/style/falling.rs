@@ -14,7 +14,7 @@ use crate::instancing::{
     voxel_target, voxel_transform,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::{AppSystems, StyleSystems};
 use crate::settings::{Style, VoxelSettings};
 use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, TransitionStarted, VoxelTween};
 
@@ -230,12 +230,8 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(OnExit(Style::Falling), reassemble_on_exit);
     app.add_systems(
         Update,
-        (track_rest, control.run_if(in_state(Style::Falling)))
-            .chain()
-            .in_set(AppSystems::Simulate)
-            .after(crate::voxelize::VoxelizeSystems)
-            .after(crate::instancing::InstancingSystems),
+        (track_rest.in_set(StyleSystems::Rest), control.run_if(in_state(Style::Falling)).in_set(StyleSystems::Control)),
     );
-    app.add_systems(FixedUpdate, step.run_if(resource_exists::<FallingPile>).in_set(AppSystems::Simulate));
+    app.add_systems(FixedUpdate, step.run_if(resource_exists::<FallingPile>).in_set(StyleSystems::Fall));
     app.add_systems(Update, sync.run_if(resource_exists::<FallingPile>).in_set(AppSystems::Sync));
 }

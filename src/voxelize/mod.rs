@@ -20,17 +20,13 @@ use voxel_core::{AnimatedModel, Progress, Stage, TriangleSoup, VoxelModel};
 
 use crate::model::surface::surface_mesh;
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
-use crate::schedule::AppSystems;
+use crate::schedule::VoxelizeSystems;
 use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
 use crate::threads::job_pool;
 
 /// Files with more triangles than this get a preview tile from their voxels instead of Bevy's glTF loader:
 /// reading such a file again and uploading its mesh would stall frames.
 pub const TILE_TRIANGLES: usize = 500_000;
-
-/// The voxelization systems (in `AppSystems::Simulate`).
-#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct VoxelizeSystems;
 
 /// Bumped whenever a setting that shapes voxelization changes; models voxelized with an older
 /// generation are redone.
@@ -222,6 +218,10 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelizeGeneration>();
     app.add_systems(
         Update,
-        (track_settings, start_jobs, finish_jobs).chain().in_set(AppSystems::Simulate).in_set(VoxelizeSystems),
+        (
+            track_settings.in_set(VoxelizeSystems::Track),
+            start_jobs.in_set(VoxelizeSystems::Start),
+            finish_jobs.in_set(VoxelizeSystems::Finish),
+        ),
     );
 }

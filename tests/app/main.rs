@@ -1,5 +1,6 @@
 //! Integration tests of the voxel-art binary and app (one test binary).
 
+mod ambiguity;
 mod animation;
 mod big;
 mod cli;
