@@ -56,7 +56,8 @@ pub(crate) struct ShellOctree<'a> {
     shell: &'a Shell,
     /// `levels[k]`: the blocks of 2ᵏ cells per side, and which of them hold a shell cell (level 0: the cells).
     levels: Vec<(Dims, BitGrid)>,
-    /// The box of each group of the shell's triangle lists.
+    /// The box of each group of the shell's triangle lists (3 bytes an overlap, within the memory estimate: the
+    /// shell's packed pairs it counts are freed by then).
     groups: Vec<GroupBox>,
 }
 
