@@ -197,6 +197,26 @@ mod tests {
     }
 
     #[test]
+    fn group_boxes_hold_their_triangles_after_rounding_to_f32() {
+        // Corners that f32 cannot hold exactly, on both sides of the rounding.
+        let tris: Vec<GridTriangle> = (0..24)
+            .map(|k| {
+                let v = |j: u32| f64::from(k * 3 + j) * (1.0 + 1e-12) + 0.1;
+                [DVec3::new(v(0), -v(1), v(2)), DVec3::new(-v(2), v(0), v(1)), DVec3::new(v(1), v(2), -v(0))]
+            })
+            .collect();
+        let ids: Vec<u32> = (0..24).collect();
+        for group in ids.chunks(GROUP) {
+            let b = group_box(&tris, group);
+            let [lo, hi] = b.map(|c| DVec3::from_array(c.map(f64::from)));
+            for t in group.iter().flat_map(|&t| tris[t as usize]) {
+                assert!(lo.cmple(t).all() && t.cmple(hi).all(), "{t} outside {b:?}");
+                assert_eq!(box_distance2(t, &b), 0.0);
+            }
+        }
+    }
+
+    #[test]
     fn an_empty_shell_has_no_nearest_triangle() {
         let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 4), [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(4), 1.0, 1 << 26).unwrap();
