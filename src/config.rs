@@ -1,4 +1,4 @@
-//! The command line: `voxel-art [MODEL|FOLDER…] [--style S] [--export-dir DIR] [--screenshot out.png --frames
+//! The command line: `voxel-art [MODEL|FOLDER…] [--style S] [--palette P] [--export-dir DIR] [--screenshot out.png --frames
 //! N | --record out.gif --seconds S]` opens the app, `voxel-art voxelize FILE…` runs the core's headless voxelizer ([`Cli`]). The app's
 //! arguments become its starting configuration in [`AppArgs::configure`], the one place that reads them: it
 //! inserts the starting resources the plugins read (no system sees the raw command line).
@@ -7,6 +7,8 @@ use std::path::PathBuf;
 
 use bevy::prelude::*;
 use clap::{Parser, Subcommand};
+use voxel_core::cli::palette::PaletteArgs;
+use voxel_core::palette::Palette;
 
 use crate::animation::AnimationStart;
 use crate::export::ExportDir;
@@ -14,7 +16,7 @@ use crate::input::PointerMode;
 use crate::library::LibrarySetup;
 use crate::record::{DEFAULT_SECONDS, HeadlessRecord, RecordPlugin, RecordSize};
 use crate::screenshot::ScreenshotPlugin;
-use crate::settings::{Style, VoxelSettings};
+use crate::settings::{ColorSettings, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
 /// The whole command line: the app's arguments, or a subcommand.
@@ -109,6 +111,10 @@ pub struct AppArgs {
     /// times (`0,0.3,0.6`) save one PNG each (`out-0.png`, `out-1.png`, …), --frames after each.
     #[arg(long, value_name = "SECONDS", value_delimiter = ',')]
     pub anim_time: Vec<f32>,
+    /// The starting colour stage (the panel's Colours section), as `voxel-art voxelize` takes it; the app's
+    /// palette is pastel unless one is named.
+    #[command(flatten)]
+    pub colors: PaletteArgs,
 }
 
 /// Parses a `--grid-size` within the panel's range.
@@ -119,6 +125,12 @@ fn grid_cell(text: &str) -> Result<f32, String> {
 }
 
 impl AppArgs {
+    /// The starting colour stage (`--palette`, pastel when none is named, `--colors`, `--dither`), or
+    /// `error: <argument>: <reason>`.
+    pub fn color_settings(&self) -> Result<ColorSettings, String> {
+        self.colors.stage_or(Palette::Pastel).map(ColorSettings).map_err(|(what, e)| format!("error: {what}: {e}"))
+    }
+
     /// Inserts the starting configuration these arguments ask for: the model list, the style (a state: call
     /// after `StatesPlugin`), when the pointer counts, the voxel-to-cell matching and the exports folder (call
     /// before the plugins that read them are added).
@@ -131,8 +143,7 @@ impl AppArgs {
         });
         app.insert_resource(LibrarySetup { shipped: !self.no_shipped, extra: self.models.clone(), start: self.start });
         app.insert_state(self.style.unwrap_or_default());
-        let headless = self.screenshot.is_some() || self.record.is_some();
-        app.insert_resource(match (headless, self.repel) {
+        app.insert_resource(match (self.headless(), self.repel) {
             (true, true) => PointerMode::Always,
             (true, false) => PointerMode::Never,
             (false, _) => PointerMode::AfterMove,
@@ -143,6 +154,8 @@ impl AppArgs {
             ..transition
         });
         app.insert_resource(self.export_dir.clone().map_or_else(ExportDir::default, ExportDir));
+        // `run_app` refuses a bad colour stage before the app is built; here it can only be the default.
+        app.insert_resource(self.color_settings().unwrap_or_default());
         app.insert_resource(AnimationStart { clip: self.clip.clone(), time: self.anim_time.first().copied() });
     }
 
@@ -151,6 +164,11 @@ impl AppArgs {
         let path = self.screenshot.clone()?;
         let seeks = self.anim_time.iter().skip(1).copied().collect();
         Some(ScreenshotPlugin { path, frames: self.frames, then: self.then, seeks })
+    }
+
+    /// Whether this run captures headless (`--screenshot` or `--record`) and exits.
+    pub(crate) fn headless(&self) -> bool {
+        self.screenshot.is_some() || self.record.is_some()
     }
 
     /// The recorder: Ctrl+R in the window, or the `--record` run.

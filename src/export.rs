@@ -1,18 +1,23 @@
 //! Saving the model as it is shown (Ctrl+S or the panel's Export button): the current model's shown voxels
-//! (its grid, fill, pastel colours and the Lego style's taller cells are in the voxelization; hollowing is
-//! applied here) go to both `.vox` and `.glb` in the exports folder, written on the IO task pool. The panel
-//! shows the files written or why it failed.
+//! (its grid, fill, colours and the Lego style's taller cells are in the voxelization; hollowing is applied
+//! here) go to both `.vox` and `.glb` in the exports folder, written on the IO task pool. For an animated
+//! model, the clip playing also goes to one animated `<model>-<clip>.glb` (the core's animated export: its
+//! poses at the app's rate, in the clip's grid and the colours shown). The panel shows the files written or
+//! why it failed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use bevy::prelude::*;
 use bevy::tasks::{IoTaskPool, Task, futures::check_ready};
-use voxel_core::export::{ExportOptions, Saved, write_vox_and_glb};
+use voxel_core::export::animated::AnimatedGltf;
+use voxel_core::export::{ExportOptions, Format, Saved, write_vox_and_glb};
+use voxel_core::palette::ColorStage;
+use voxel_core::{TriangleSoup, VoxelError, VoxelizeOptions, voxelize_within};
 
-use crate::model::ModelLibrary;
-use crate::model::VoxelModelAsset;
+use crate::model::playback::POSES_PER_SECOND;
+use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::VoxelSettings;
+use crate::settings::{ColorSettings, Style, VoxelSettings};
 
 /// The folder exports go to when `--export-dir` is not given.
 pub const DEFAULT_EXPORT_DIR: &str = "voxel-art-exports";
@@ -39,8 +44,8 @@ pub enum ExportStatus {
     Idle,
     /// Files are being written.
     Writing,
-    /// Both files were written.
-    Saved(Saved),
+    /// Both files were written, and for an animated model its clip's animated .glb.
+    Saved(Saved, Option<PathBuf>),
     /// Nothing to save, or writing failed: the reason.
     Failed(String),
 }
@@ -51,8 +56,9 @@ impl ExportStatus {
         match self {
             ExportStatus::Idle => None,
             ExportStatus::Writing => Some("exporting…".into()),
-            ExportStatus::Saved(saved) => {
-                Some(format!("saved {} and {}", saved.vox.0.display(), saved.glb.0.display()))
+            ExportStatus::Saved(saved, animated) => {
+                let clip = animated.as_ref().map_or_else(String::new, |p| format!(" and {}", p.display()));
+                Some(format!("saved {}, {}{clip}", saved.vox.0.display(), saved.glb.0.display()))
             }
             ExportStatus::Failed(reason) => Some(format!("export failed: {reason}")),
         }
@@ -65,7 +71,46 @@ pub struct ExportSystems;
 
 /// The export being written.
 #[derive(Resource, Default)]
-struct ExportJob(Option<Task<Result<Saved, String>>>);
+struct ExportJob(Option<Task<Result<(Saved, Option<PathBuf>), String>>>);
+
+/// The clip of an animated model to export: the file, the clip, and the options and colours its poses are
+/// shown with.
+struct ClipExport {
+    file: PathBuf,
+    clip: usize,
+    options: VoxelizeOptions,
+    colors: ColorStage,
+}
+
+impl ClipExport {
+    /// Poses the clip at the app's rate ([`POSES_PER_SECOND`]), voxelizes each pose in the clip's grid, and
+    /// writes the frames as one animated `<dir>/<name>-<clip>.glb` (a clip's frames share the first frame's
+    /// colours); returns its path.
+    fn write(&self, dir: &Path, name: &str) -> voxel_core::Result<PathBuf> {
+        let mut model = voxel_core::load_animated_file(&self.file)?;
+        let info = model
+            .clips()
+            .get(self.clip)
+            .cloned()
+            .ok_or_else(|| VoxelError::Parameter(format!("the model has no clip {} any more", self.clip)))?;
+        let bounds = model.clip_bounds(self.clip)?;
+        let frames = ((info.duration * POSES_PER_SECOND).ceil() as usize).max(1);
+        let mut animated = AnimatedGltf::new(&ExportOptions { name: name.into() });
+        let mut soup = TriangleSoup::default();
+        let mut colors = self.colors.for_frames();
+        for frame in 0..frames {
+            let time = frame as f32 / POSES_PER_SECOND;
+            model.pose_into(self.clip, time, &mut soup)?;
+            let mut voxels = voxelize_within(&soup, &self.options, bounds)?;
+            colors.apply(&mut voxels)?;
+            animated.push_frame(&voxels, time)?;
+        }
+        let clip: String = info.name.chars().map(|c| if c.is_alphanumeric() || c == '_' { c } else { '-' }).collect();
+        let path = dir.join(format!("{name}-{clip}.glb"));
+        animated.write(&path, Format::Glb, &info.name, info.duration)?;
+        Ok(path)
+    }
+}
 
 /// Starts writing the current model when asked (one export at a time: requests during one are dropped).
 fn start_export(
@@ -73,6 +118,7 @@ fn start_export(
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
+    (style, colors): (Res<State<Style>>, Res<ColorSettings>),
     dir: Res<ExportDir>,
     mut job: ResMut<ExportJob>,
     mut status: ResMut<ExportStatus>,
@@ -86,11 +132,19 @@ fn start_export(
     };
     let model = model.shown_model(settings.hollow);
     let options = ExportOptions { name: entry.name.clone() };
+    let clip = entry.animation.as_ref().map(|playback| ClipExport {
+        file: entry.path.clone(),
+        clip: playback.clip,
+        options: settings.voxelize_options(*style.get()),
+        colors: colors.0.clone(),
+    });
     let dir = dir.0.clone();
     *status = ExportStatus::Writing;
-    job.0 = Some(
-        IoTaskPool::get().spawn(async move { write_vox_and_glb(&model, &dir, &options).map_err(|e| e.to_string()) }),
-    );
+    job.0 = Some(IoTaskPool::get().spawn(async move {
+        let saved = write_vox_and_glb(&model, &dir, &options).map_err(|e| e.to_string())?;
+        let animated = clip.map(|clip| clip.write(&dir, &options.name)).transpose().map_err(|e| e.to_string())?;
+        Ok((saved, animated))
+    }));
 }
 
 /// Reports a finished export.
@@ -98,9 +152,10 @@ fn finish_export(mut job: ResMut<ExportJob>, mut status: ResMut<ExportStatus>) {
     let Some(result) = job.0.as_mut().and_then(check_ready) else { return };
     job.0 = None;
     *status = match result {
-        Ok(saved) => {
-            info!("exported {} and {}", saved.vox.0.display(), saved.glb.0.display());
-            ExportStatus::Saved(saved)
+        Ok((saved, animated)) => {
+            let status = ExportStatus::Saved(saved, animated);
+            info!("export: {}", status.message().unwrap_or_default());
+            status
         }
         Err(reason) => {
             warn!("export failed: {reason}");

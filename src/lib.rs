@@ -5,9 +5,10 @@
 //! `MeshTag`; the changed ones copied into one GPU buffer drawn by a few chunk entities), `transition`
 //! (per-voxel tweened morphs), `animation` (animated models posed and voxelized live, their cells followed by
 //! the voxels), `style` (Lego, bubbles, falling, mouse repel), `input`, `export` (saves the shown model as .vox
-//! and .glb), and the render-side `stage`, `camera`, `ui`, `preview`, `screenshot` and `record` (an animated GIF
-//! of the stage; `cue` says when a headless capture begins). [`LogicPlugin`] holds everything that runs without
-//! a GPU, for tests.
+//! and .glb, an animated model's clip as one animated .glb), `palette` (recolours the models from their sampled
+//! colours when the colour stage changes, reads dropped palette files), and the render-side `stage`, `camera`,
+//! `ui`, `preview`, `screenshot` and `record` (an animated GIF of the stage; `cue` says when a headless capture
+//! begins). [`LogicPlugin`] holds everything that runs without a GPU, for tests.
 
 pub mod animation;
 pub mod assets;
@@ -20,6 +21,7 @@ pub mod input;
 pub mod instancing;
 pub mod library;
 pub mod model;
+pub mod palette;
 mod preview;
 pub mod record;
 pub mod rng;
@@ -34,6 +36,7 @@ mod ui;
 pub mod voxelize;
 
 use bevy::prelude::*;
+use bevy::render::RenderPlugin;
 use bevy::window::{PresentMode, WindowResolution};
 
 pub use schedule::AppSystems;
@@ -54,6 +57,7 @@ impl Plugin for LogicPlugin {
             style::plugin,
             input::plugin,
             export::plugin,
+            palette::plugin,
         ));
         // The library reads files before voxelization picks them up, animation poses what voxelization read, the
         // pool grows for the pose and exports save what they made (no plugin names another).
@@ -91,7 +95,13 @@ impl Plugin for AppPlugin {
                     }),
                     ..default()
                 })
-                .set(asset_plugin),
+                .set(asset_plugin)
+                .set(RenderPlugin {
+                    // A headless capture draws everything from the frame it first appears in (a pipeline
+                    // still compiling would leave it out), so what it shows does not depend on the CPU's load.
+                    synchronous_pipeline_compilation: self.args.headless(),
+                    ..default()
+                }),
         );
         self.args.configure(app);
         // Render-side registration first (the voxel material's asset type comes from its MaterialPlugin).
@@ -118,6 +128,10 @@ pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
 
 /// Runs the app until its window closes; returns the exit status.
 fn run_app(args: config::AppArgs) -> i32 {
+    if let Err(message) = args.color_settings() {
+        eprintln!("{message}");
+        return 1;
+    }
     let exit = App::new().add_plugins(AppPlugin { args }).run();
     match exit {
         AppExit::Success => 0,

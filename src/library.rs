@@ -8,6 +8,7 @@ use bevy::window::FileDragAndDrop;
 
 use crate::assets::{asset_root, file_asset_path};
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus};
+use crate::palette::is_palette_file;
 use crate::schedule::AppSystems;
 
 /// The models the list starts with (from the command line).
@@ -129,9 +130,12 @@ fn handle_requests(mut requests: MessageReader<LibraryRequest>, mut library: Res
     }
 }
 
+/// A dropped model file or folder joins the list (a palette file is the `palette` plugin's).
 fn dropped_files(mut drops: MessageReader<FileDragAndDrop>, mut requests: MessageWriter<LibraryRequest>) {
     for drop in drops.read() {
-        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop {
+        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop
+            && !is_palette_file(path_buf)
+        {
             requests.write(LibraryRequest::Add(path_buf.clone()));
         }
     }

@@ -4,13 +4,15 @@
 //! the rest read it.
 
 pub mod playback;
+pub mod surface;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
-use voxel_core::{TriangleSoup, Voxel, VoxelModel};
+use voxel_core::palette::ColorStage;
+use voxel_core::{Progress, TriangleSoup, Voxel, VoxelModel};
 
 pub use playback::Playback;
 
@@ -20,6 +22,18 @@ pub use playback::Playback;
 pub struct VoxelModelAsset(pub VoxelModel);
 
 impl VoxelModelAsset {
+    /// `sampled` (a voxelization's colours as sampled) in the colours of the colour `stage`: the one place the
+    /// app derives the colours it shows. A stage the core refuses (the panel's bounds rule that out) leaves the
+    /// sampled colours, with a warning.
+    pub fn colored(sampled: &VoxelModel, stage: &ColorStage) -> Self {
+        let mut model = sampled.clone();
+        if let Err(e) = stage.apply(&mut model) {
+            warn!("colour stage: {e}");
+            model = sampled.clone();
+        }
+        Self(model)
+    }
+
     /// The voxels shown: only those that can be seen when `hollow`, else all.
     pub fn shown(&self, hollow: bool) -> Box<dyn Iterator<Item = Voxel> + Send + '_> {
         if hollow { Box::new(self.visible_voxels()) } else { self.voxels() }
@@ -34,6 +48,13 @@ impl VoxelModelAsset {
     pub fn shown_count(&self, hollow: bool) -> usize {
         if hollow { self.stats.visible } else { self.len() }
     }
+}
+
+/// A model's colours were derived again from its sampled colours (a new colour stage): same asset, same cells.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Recolored {
+    /// The recoloured asset.
+    pub model: AssetId<VoxelModelAsset>,
 }
 
 /// Where a model is in its life.
@@ -66,14 +87,21 @@ pub struct ModelEntry {
     pub status: ModelStatus,
     /// The triangles, read once by the core's importer.
     pub soup: Option<Arc<TriangleSoup>>,
-    /// The latest voxelization.
+    /// The latest voxelization, in the colours of the colour stage ([`crate::settings::ColorSettings`]).
     pub voxels: Option<Handle<VoxelModelAsset>>,
+    /// The latest voxelization as sampled (before the colour stage): a new palette recolours `voxels` from it.
+    pub sampled: Option<Arc<VoxelModel>>,
     /// The settings generation `voxels` was made with.
     pub voxels_generation: Option<u64>,
     /// How long the latest voxelization took.
     pub voxelize_ms: f32,
     /// The animation, when the file has clips (read by the same import as `soup`); `None` for a static model.
     pub animation: Option<Playback>,
+    /// How far the latest voxelization job got (shared with the job; cancelling it stops the job).
+    pub progress: Progress,
+    /// The preview tile's mesh for a file too big to show through Bevy's glTF loader without a stall (the
+    /// surface of its first voxels, built off the main thread); `None`: the tile shows `gltf`.
+    pub tile_mesh: Option<Handle<Mesh>>,
     /// Something of the file that is not shown, and why (an animation the core refuses: the model shows still).
     pub warning: Option<String>,
 }
@@ -89,8 +117,11 @@ impl ModelEntry {
             status,
             soup: None,
             voxels: None,
+            sampled: None,
             voxels_generation: None,
             voxelize_ms: 0.0,
+            progress: Progress::default(),
+            tile_mesh: None,
             animation: None,
             warning: None,
         }

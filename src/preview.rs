@@ -1,8 +1,12 @@
 //! Preview viewports: each model's original glTF in a small viewport along the right edge, with its own
 //! camera, render layer and soft coloured background, turning slowly; clicking one picks that model. An
-//! animated model's tile plays its clip (`play`).
+//! animated model's tile plays its clip (`play`). A file too big for Bevy's glTF loader
+//! ([`TILE_TRIANGLES`](crate::voxelize::TILE_TRIANGLES)) shows the surface of its voxels instead; a file Bevy's
+//! glTF loader refuses but the core reads (WebP textures: bevy_gltf does not decode EXT_texture_webp) shows its
+//! triangles untextured (`untextured`).
 
 mod play;
+mod untextured;
 
 use bevy::app::{HierarchyPropagatePlugin, Propagate};
 use bevy::camera::Viewport;
@@ -11,11 +15,11 @@ use bevy::color::Hsla;
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
-use bevy::world_serialization::WorldAssetRoot;
+use bevy::world_serialization::{WorldAsset, WorldAssetRoot};
 
 use crate::input::PointerOverUi;
 use crate::library::LibraryRequest;
-use crate::model::{ModelLibrary, ModelStatus};
+use crate::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 
 /// Previews get render layers 1..=MAX_PREVIEWS (layer 0 is the stage).
 pub const MAX_PREVIEWS: usize = 24;
@@ -56,11 +60,20 @@ fn setup_light(mut commands: Commands) {
     ));
 }
 
-/// Spawns a camera and the original scene for every loaded model that has none yet.
+/// What a tile shows: the original glTF scene, a big file's voxel surface, or the core's triangles untextured.
+enum TileContent {
+    Scene(Handle<WorldAsset>),
+    Surface(Handle<Mesh>),
+    Untextured,
+}
+
+/// Spawns a camera and the original scene (a big file's voxel surface, or the core's triangles untextured when
+/// Bevy could not load the file) for every loaded model that has none yet.
 fn spawn_previews(
     mut commands: Commands,
     library: Res<ModelLibrary>,
-    gltfs: Res<Assets<Gltf>>,
+    (gltfs, asset_server, models): (Res<Assets<Gltf>>, Res<AssetServer>, Res<Assets<VoxelModelAsset>>),
+    (mut meshes, mut materials): (ResMut<Assets<Mesh>>, ResMut<Assets<StandardMaterial>>),
     cameras: Query<&PreviewCamera>,
 ) {
     let n = library.entries.len().min(MAX_PREVIEWS);
@@ -68,8 +81,25 @@ fn spawn_previews(
         if cameras.iter().any(|c| c.0 == i) || matches!(entry.status, ModelStatus::Loading | ModelStatus::Failed(_)) {
             continue;
         }
-        let (Some(gltf), Some(soup)) = (gltfs.get(&entry.gltf), entry.soup.as_ref()) else { continue };
-        let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
+        let Some(soup) = entry.soup.as_ref() else { continue };
+        let soup_bounds = || soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3]));
+        let (content, (lo, hi)) = match (&entry.tile_mesh, gltfs.get(&entry.gltf)) {
+            (Some(mesh), _) => {
+                // The surface is in the voxels' normalized space: fit their grid.
+                let Some(model) = entry.latest(&models) else { continue };
+                let spec = &model.spec;
+                let hi = std::array::from_fn(|a| spec.origin[a] + spec.dims[a] as f32 * spec.cell[a]);
+                (TileContent::Surface(mesh.clone()), (spec.origin, hi))
+            }
+            (None, Some(gltf)) => {
+                let Some(scene) = gltf.default_scene.clone().or_else(|| gltf.scenes.first().cloned()) else { continue };
+                (TileContent::Scene(scene), soup_bounds())
+            }
+            (None, None) if asset_server.load_state(&entry.gltf).is_failed() => {
+                (TileContent::Untextured, soup_bounds())
+            }
+            (None, None) => continue,
+        };
         let layer = RenderLayers::layer(i + 1);
         let hue = i as f32 / n.max(1) as f32 * 360.0;
         commands.spawn((
@@ -85,21 +115,28 @@ fn spawn_previews(
             layer.clone(),
         ));
         // Fit the model in a unit-ish sphere: scale its diagonal to 2.4 and centre it.
-        let (lo, hi) = soup.bounds().unwrap_or(([-1.0; 3], [1.0; 3]));
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let scale = 2.4 / (hi - lo).length().max(1e-6);
-        commands
-            .spawn((
-                Name::new(format!("preview {i}")),
-                PreviewModel(i),
-                Transform::default(),
-                Visibility::default(),
-                Propagate(layer),
-            ))
-            .with_child((
-                WorldAssetRoot(scene),
-                Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale),
-            ));
+        let fit = Transform::from_scale(Vec3::splat(scale)).with_translation(-(lo + hi) / 2.0 * scale);
+        let mut root = commands.spawn((
+            Name::new(format!("preview {i}")),
+            PreviewModel(i),
+            Transform::default(),
+            Visibility::default(),
+            Propagate(layer),
+        ));
+        match content {
+            TileContent::Scene(scene) => root.with_child((WorldAssetRoot(scene), fit)),
+            TileContent::Surface(mesh) => {
+                let material = materials.add(StandardMaterial { perceptual_roughness: 0.8, ..default() });
+                root.with_child((Mesh3d(mesh), MeshMaterial3d(material), fit))
+            }
+            TileContent::Untextured => root.with_child((
+                Mesh3d(meshes.add(untextured::mesh(soup))),
+                MeshMaterial3d(materials.add(untextured::material())),
+                fit,
+            )),
+        };
     }
 }
 

@@ -1,5 +1,5 @@
 //! The app's public system sets and its time step. Every `Update` system of the app is in one of the
-//! [`AppSystems`], chained once: where the pointer is, input, simulation, animation, the sync of voxel entities
+//! [`AppSystems`], chained once: where the pointer is, input, the colour stage, simulation, animation, the sync of voxel entities
 //! to what the renderer reads, then the stage around them. The falling pile steps in `FixedUpdate` at
 //! [`FIXED_STEP`], which is also the frame step of headless runs and screenshots (one frame, one step).
 
@@ -17,6 +17,9 @@ pub enum AppSystems {
     Pointer,
     /// Keyboard, mouse clicks, the cursor ray, dropped files: turned into requests and messages.
     Input,
+    /// The colour stage: dropped palette files, the models recoloured when it changes (before anything reads
+    /// the models' colours this frame).
+    Color,
     /// Loading, voxelization, the voxel pool, model switching, the falling pile.
     Simulate,
     /// Per-voxel animation (transitions, styles).
@@ -33,6 +36,7 @@ pub(super) fn plugin(app: &mut App) {
         (
             AppSystems::Pointer,
             AppSystems::Input,
+            AppSystems::Color,
             AppSystems::Simulate,
             AppSystems::Animate,
             AppSystems::Sync,

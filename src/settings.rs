@@ -1,6 +1,7 @@
 //! User-tunable parameters (the side panel edits them).
 
 use bevy::prelude::*;
+use voxel_core::palette::{ColorStage, Palette};
 use voxel_core::{FillMode, GridSize, VoxelizeOptions};
 
 /// How voxels look and move: a Bevy state. Each style sets itself up on entering it and tears itself down on
@@ -56,8 +57,6 @@ pub struct VoxelSettings {
     pub fill: FillMode,
     /// Show only the voxels that can be seen (the model keeps its interior: falling drops it too).
     pub hollow: bool,
-    /// The article's pastel colour remap.
-    pub pastel: bool,
     /// Box edge as a fraction of the cell.
     pub box_size: f32,
     /// Corner radius as a fraction of the box edge.
@@ -68,15 +67,7 @@ pub struct VoxelSettings {
 
 impl Default for VoxelSettings {
     fn default() -> Self {
-        Self {
-            grid_size: 0.24,
-            fill: FillMode::Winding,
-            hollow: true,
-            pastel: true,
-            box_size: 1.0,
-            roundness: 0.125,
-            speed: 1.0,
-        }
+        Self { grid_size: 0.24, fill: FillMode::Winding, hollow: true, box_size: 1.0, roundness: 0.125, speed: 1.0 }
     }
 }
 
@@ -92,11 +83,23 @@ impl VoxelSettings {
             fill: self.fill,
             // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
             hollow: false,
-            pastel: self.pastel,
+            // Colours come out as sampled: the colour stage ([`ColorSettings`]) maps them afterwards.
             // The grid is bounded by the core's memory budget; what the app draws is capped by `MAX_DRAWN`
             // voxels instead.
             ..VoxelizeOptions::default()
         }
+    }
+}
+
+/// The colour stage applied to every model's sampled colours (the panel's palette, colour limit and dither):
+/// changing it recolours the models without voxelizing them again.
+#[derive(Resource, Clone, Debug, PartialEq, Eq)]
+pub struct ColorSettings(pub ColorStage);
+
+impl Default for ColorSettings {
+    /// The article's pastel remap, no limit, no dithering.
+    fn default() -> Self {
+        Self(ColorStage { palette: Palette::Pastel, max_colors: None, dither: false })
     }
 }
 
@@ -139,6 +142,7 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<PanelOpen>();
     app.init_resource::<SettingDrag>();
     app.init_resource::<VoxelSettings>();
+    app.init_resource::<ColorSettings>();
     // The starting style may have been set by the command line already (`AppArgs::configure`).
     if !app.world().contains_resource::<State<Style>>() {
         app.init_state::<Style>();

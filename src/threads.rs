@@ -5,7 +5,9 @@
 //! - on machines with at most [`SINGLE_THREADED_UP_TO`] cores the main world's schedules run on the
 //!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
-//!   spread their work over every core.
+//!   spread their work over every core;
+//! - voxelization jobs run their parallel work in a pool of their own that leaves a core to the frame
+//!   ([`job_pool`]): a big model's seconds of voxelizing never take the core a frame's systems run on.
 
 use bevy::app::{TaskPoolOptions, TaskPoolPlugin};
 use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
@@ -19,6 +21,17 @@ pub fn task_pools() -> TaskPoolPlugin {
     let mut options = TaskPoolOptions::default();
     options.compute.min_threads = bevy::tasks::available_parallelism();
     TaskPoolPlugin { task_pool_options: options }
+}
+
+/// The rayon pool voxelization jobs run in: every core but one (at least one thread). Frame systems use rayon's
+/// global pool, so a running job never queues ahead of a frame's parallel work.
+pub fn job_pool() -> &'static rayon::ThreadPool {
+    static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| {
+        let threads = bevy::tasks::available_parallelism().saturating_sub(1).max(1);
+        let builder = rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|i| format!("voxelize-{i}"));
+        builder.build().expect("the operating system starts the voxelization threads")
+    })
 }
 
 /// Whether a machine with `cores` cores runs the main schedules single-threaded.

@@ -22,7 +22,7 @@ use crate::instancing::{
     PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, drawn_count,
     pack_color, placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
 };
-use crate::model::{ModelLibrary, VoxelModelAsset};
+use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
 use crate::schedule::AppSystems;
 use crate::settings::{SettingDrag, VoxelSettings};
@@ -564,19 +564,46 @@ fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Lo
     *done = true;
 }
 
+/// Gives the voxels of the model on screen its new colours after a recolour ([`Recolored`]): slot i keeps cell i
+/// of the layout (as the morph laid them) and takes that cell's colour; only tags that change are written, so
+/// only their chunks are uploaded. During a morph, once it is over (its colours were planned from the old ones).
+fn show_recolored(
+    mut recolored: MessageReader<Recolored>,
+    mut pending: Local<Option<AssetId<VoxelModelAsset>>>,
+    models: Res<Assets<VoxelModelAsset>>,
+    (settings, transition, active): (Res<VoxelSettings>, Res<TransitionSettings>, Res<ActiveTransition>),
+    pool: Res<VoxelPool>,
+    mut tags: Query<&mut MeshTag>,
+) {
+    if let Some(r) = recolored.read().filter(|r| pool.shown == Some(r.model)).last() {
+        *pending = Some(r.model);
+    }
+    if active.running.is_some() {
+        return;
+    }
+    let Some(id) = pending.take().filter(|id| pool.shown == Some(*id)) else { return };
+    let Some(model) = models.get(id) else { return };
+    for (target, &entity) in layout(model, &settings, &transition).iter().zip(&pool.slots) {
+        if let Ok(mut tag) = tags.get_mut(entity) {
+            tag.set_if_neq(MeshTag(pack_color(target.color)));
+        }
+    }
+}
+
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
+    app.add_message::<Recolored>();
     app.register_type::<TransitionSettings>();
     if !app.is_plugin_added::<TweeningPlugin>() {
         app.add_plugins(TweeningPlugin);
     }
     app.add_systems(
         Update,
-        (placeholder, float_placeholder, start, pace, step)
+        (placeholder, float_placeholder, start, pace, step, show_recolored)
             .chain()
             .in_set(AppSystems::Animate)
             .in_set(TransitionSystems),

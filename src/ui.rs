@@ -4,6 +4,7 @@ use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use voxel_core::FillMode;
+use voxel_core::palette::{ColorStage, FIXED_NAMES, Palette};
 
 use crate::animation::AnimationRequest;
 use crate::export::{ExportRequest, ExportStatus};
@@ -11,16 +12,29 @@ use crate::input::{PointerOverUi, ToggleRecord};
 use crate::instancing::{MAX_DRAWN, VoxelPool};
 use crate::library::LibraryRequest;
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
+use crate::palette::PaletteFiles;
 use crate::record::RecordStatus;
-use crate::settings::{PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
 use crate::transition::{Assignment, TransitionSettings};
 
-fn status_mark(status: &ModelStatus) -> &'static str {
-    match status {
-        ModelStatus::Loading => "  (loading…)",
-        ModelStatus::Voxelizing => "  (voxelizing…)",
-        ModelStatus::Ready => "",
-        ModelStatus::Failed(_) => "  ⚠ failed",
+/// The colour limit slider's top (the .vox export holds 255 colours).
+const MAX_COLORS_SLIDER: usize = 255;
+
+fn status_mark(entry: &ModelEntry) -> String {
+    match entry.status {
+        ModelStatus::Loading | ModelStatus::Voxelizing => format!("  ({})", job_stage(entry)),
+        ModelStatus::Ready => String::new(),
+        ModelStatus::Failed(_) => "  ⚠ failed".into(),
+    }
+}
+
+/// What a loading or voxelizing model's job is doing, e.g. "filling, 60 %".
+fn job_stage(entry: &ModelEntry) -> String {
+    let stage = entry.progress.stage();
+    match stage {
+        voxel_core::Stage::Waiting if entry.status == ModelStatus::Loading => "loading…".into(),
+        voxel_core::Stage::Waiting => "voxelizing…".into(),
+        _ => format!("{}, {:.0} %", stage.label(), stage.fraction() * 100.0),
     }
 }
 
@@ -32,7 +46,7 @@ const AMBER: egui::Color32 = egui::Color32::from_rgb(190, 120, 0);
 /// A model's line in the list: its name and state; red when it failed, amber with a ⚠ when part of the file is
 /// not shown; and the hover text saying why.
 fn entry_label(entry: &ModelEntry) -> (String, Option<egui::Color32>, Option<&str>) {
-    let label = format!("{}{}", entry.name, status_mark(&entry.status));
+    let label = format!("{}{}", entry.name, status_mark(entry));
     match (&entry.status, &entry.warning) {
         (ModelStatus::Failed(reason), _) => (label, Some(RED), Some(reason)),
         (_, Some(warning)) => (format!("{label}  ⚠"), Some(AMBER), Some(warning)),
@@ -83,7 +97,6 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
         ui.selectable_value(&mut settings.fill, FillMode::None, "surface");
     });
     ui.checkbox(&mut settings.hollow, "hollow (only visible voxels)");
-    ui.checkbox(&mut settings.pastel, "pastel colours");
     ui.checkbox(&mut repel.enabled, "mouse repel (R)");
     ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.radius, 0.2..=4.0).text("repel radius"));
     ui.add_enabled(repel.enabled, egui::Slider::new(&mut repel.strength, 0.0..=2.0).text("repel strength"));
@@ -91,6 +104,47 @@ fn parameters(ui: &mut egui::Ui, settings: &mut VoxelSettings, style: &mut Style
         ui.label("F: drop / reassemble");
     }
     grid.dragged()
+}
+
+/// The panel's name of a palette: a built-in's name, a file's name without its folder.
+fn palette_label(palette: &Palette) -> String {
+    match palette {
+        Palette::Original => "original".into(),
+        Palette::Pastel => "pastel".into(),
+        Palette::Fixed { name, .. } => {
+            std::path::Path::new(name).file_name().map_or_else(|| name.clone(), |f| f.to_string_lossy().into_owned())
+        }
+    }
+}
+
+/// The colour stage: the palette (built-ins and files read), the colour limit (0: off) and dithering, and
+/// the last palette file's error.
+fn colors(ui: &mut egui::Ui, stage: &mut ColorStage, files: &PaletteFiles) {
+    ui.heading("Colours");
+    let builtins = [Palette::Original, Palette::Pastel]
+        .into_iter()
+        .chain(FIXED_NAMES.iter().filter_map(|name| Palette::from_arg(name).ok()));
+    egui::ComboBox::from_label("palette").selected_text(palette_label(&stage.palette)).show_ui(ui, |ui| {
+        for choice in builtins.chain(files.palettes.iter().cloned()) {
+            let label = palette_label(&choice);
+            ui.selectable_value(&mut stage.palette, choice, label);
+        }
+    });
+    let mut limit = stage.max_colors.unwrap_or(0);
+    let slider = egui::Slider::new(&mut limit, 0..=MAX_COLORS_SLIDER)
+        .text("colors")
+        .logarithmic(true)
+        .custom_formatter(|n, _| if n < 1.0 { "off".into() } else { format!("{n:.0}") });
+    ui.add(slider);
+    stage.max_colors = (limit > 0).then_some(limit);
+    ui.add_enabled(
+        matches!(stage.palette, Palette::Fixed { .. }),
+        egui::Checkbox::new(&mut stage.dither, "dither (fixed palettes)"),
+    );
+    ui.label(egui::RichText::new("Drop a .hex, .png or .vox palette on the window to use it.").small());
+    if let Some(error) = &files.error {
+        ui.colored_label(egui::Color32::from_rgb(200, 60, 60), error);
+    }
 }
 
 /// The current model's clips (pick one), play / pause, speed and where the clip is; absent for a static model.
@@ -151,7 +205,7 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         ModelStatus::Loading | ModelStatus::Voxelizing => {
             ui.horizontal(|ui| {
                 ui.spinner();
-                ui.label(if entry.status == ModelStatus::Loading { "loading…" } else { "voxelizing…" });
+                ui.label(job_stage(entry));
             });
         }
         ModelStatus::Failed(reason) => {
@@ -173,9 +227,14 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
             "grid {}×{}×{}, {} triangles, {} colours",
             s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
         ));
-        ui.label(format!("voxelized in {:.1} ms", entry.voxelize_ms));
+        ui.label(format!("voxelized in {:.1} ms, {}", entry.voxelize_ms, megabytes(model.memory_bytes())));
     }
     ui.label(format!("voxel pool: {} entities", pool.slots.len()));
+}
+
+/// A byte count for the panel, e.g. "1.4 MB of voxel data".
+fn megabytes(bytes: usize) -> String {
+    format!("{:.1} MB of voxel data", bytes as f64 / 1e6)
 }
 
 /// What the panel's Export and Record buttons read and send.
@@ -234,7 +293,11 @@ fn panel(
     mut over: ResMut<PointerOverUi>,
     mut transition: ResMut<TransitionSettings>,
     mut outputs: Outputs,
-    mut animation_requests: MessageWriter<AnimationRequest>,
+    (mut animation_requests, mut color_settings, palette_files): (
+        MessageWriter<AnimationRequest>,
+        ResMut<ColorSettings>,
+        Res<PaletteFiles>,
+    ),
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     ctx.set_visuals(egui::Visuals::light());
@@ -251,6 +314,7 @@ fn panel(
     let mut edited = settings.clone();
     let mut chosen = *style.get();
     let mut edited_repel = repel.clone();
+    let mut edited_colors = color_settings.0.clone();
     let mut dragging = false;
     egui::Panel::left("voxel-art panel").resizable(false).exact_size(270.0).show_inside(&mut root, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
@@ -262,6 +326,9 @@ fn panel(
                 ui.separator();
             }
             dragging = parameters(ui, &mut edited, &mut chosen, &mut edited_repel);
+            ui.separator();
+            colors(ui, &mut edited_colors, &palette_files);
+            ui.separator();
             let mut edited_transition = transition.clone();
             transition_settings(ui, &mut edited_transition);
             if edited_transition != *transition {
@@ -285,6 +352,9 @@ fn panel(
     drag.set_if_neq(SettingDrag(dragging));
     if edited_repel != *repel {
         *repel = edited_repel;
+    }
+    if edited_colors != color_settings.0 {
+        color_settings.0 = edited_colors;
     }
     if chosen != *style.get() {
         next_style.set(chosen);

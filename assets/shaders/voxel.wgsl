@@ -4,10 +4,9 @@
     pbr_fragment::pbr_input_from_standard_material,
     pbr_functions::{alpha_discard, apply_pbr_lighting, main_pass_post_lighting_processing},
     forward_io::{VertexOutput, FragmentOutput},
-    view_transformations::position_world_to_clip,
 }
 #import bevy_render::color_operations::srgb_to_linear
-#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, point_to_world, normal_to_world}
+#import "shaders/voxel_common.wgsl"::{place, placed_normal}
 
 struct VoxelVertex {
     @builtin(instance_index) instance_index: u32,
@@ -26,13 +25,12 @@ struct VoxelVertexOutput {
 
 @vertex
 fn vertex(in: VoxelVertex) -> VoxelVertexOutput {
-    let vertex = box_vertex(in.instance_index, in.vertex_index);
-    let world = point_to_world(vertex.voxel, flipped(vertex.flip, in.position));
+    let placed = place(in.instance_index, in.vertex_index, in.position);
     var out: VoxelVertexOutput;
-    out.world_position = vec4(world, 1.0);
-    out.position = position_world_to_clip(world);
-    out.world_normal = normal_to_world(vertex.voxel, flipped(vertex.flip, in.normal));
-    out.color = vertex.voxel.color;
+    out.world_position = placed.world_position;
+    out.position = placed.clip_position;
+    out.world_normal = placed_normal(placed, in.normal);
+    out.color = placed.voxel.color;
     out.instance_index = in.instance_index;
     return out;
 }

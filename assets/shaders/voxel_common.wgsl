@@ -3,7 +3,7 @@
 // (the chunk's index is its MeshTag, the box's is the vertex index over the vertices of one box). Bit 31 of the
 // tag says the chunk draws the low detail mesh: three faces (+x, +y, +z, four vertices each), each turned to the
 // side of the box that faces the viewer.
-#import bevy_pbr::{mesh_bindings::mesh, mesh_functions, mesh_view_bindings::view}
+#import bevy_pbr::{mesh_bindings::mesh, mesh_functions, mesh_view_bindings::view, view_transformations::position_world_to_clip}
 
 // One voxel (32 bytes, `GpuVoxel` in src/instancing/gpu.rs). Voxels only turn about y: the box's x axis in the
 // xz plane (width × (cos, −sin)), its height and its depth place it; a hidden voxel has no size.
@@ -90,4 +90,24 @@ fn normal_to_world(v: Voxel, n: vec3<f32>) -> vec3<f32> {
     let c = turn_of(v);
     let m = n / max(vec3(length(v.x_axis), v.scale_y, v.scale_z), vec3(1e-8));
     return normalize(vec3(c.x * m.x - c.y * m.z, m.y, c.y * m.x + c.x * m.z));
+}
+
+// A vertex of a chunk's mesh placed at its voxel: the voxel and face flip, its world and clip positions.
+struct PlacedVertex {
+    voxel: Voxel,
+    flip: u32,
+    world_position: vec4<f32>,
+    clip_position: vec4<f32>,
+}
+
+// Places the unit box point `position` of vertex `vertex_index` of instance `instance_index` at its voxel.
+fn place(instance_index: u32, vertex_index: u32, position: vec3<f32>) -> PlacedVertex {
+    let vertex = box_vertex(instance_index, vertex_index);
+    let world = point_to_world(vertex.voxel, flipped(vertex.flip, position));
+    return PlacedVertex(vertex.voxel, vertex.flip, vec4(world, 1.0), position_world_to_clip(world));
+}
+
+// A unit box normal of a placed vertex in world space.
+fn placed_normal(placed: PlacedVertex, normal: vec3<f32>) -> vec3<f32> {
+    return normal_to_world(placed.voxel, flipped(placed.flip, normal));
 }

@@ -1,10 +1,7 @@
 // The voxels' prepass vertex shader (the light's shadow map, and any depth or normal prepass): each box of a
 // chunk's mesh placed at its voxel (voxel_common.wgsl), as in the main pass.
-#import bevy_pbr::{
-    prepass_io::VertexOutput,
-    view_transformations::position_world_to_clip,
-}
-#import "shaders/voxel_common.wgsl"::{box_vertex, flipped, point_to_world, normal_to_world}
+#import bevy_pbr::prepass_io::VertexOutput
+#import "shaders/voxel_common.wgsl"::{place, placed_normal}
 
 struct VoxelVertex {
     @builtin(instance_index) instance_index: u32,
@@ -17,17 +14,16 @@ struct VoxelVertex {
 
 @vertex
 fn vertex(in: VoxelVertex) -> VertexOutput {
-    let vertex = box_vertex(in.instance_index, in.vertex_index);
-    let world = point_to_world(vertex.voxel, flipped(vertex.flip, in.position));
+    let placed = place(in.instance_index, in.vertex_index, in.position);
     var out: VertexOutput;
-    out.world_position = vec4(world, 1.0);
-    out.position = position_world_to_clip(world);
+    out.world_position = placed.world_position;
+    out.position = placed.clip_position;
 #ifdef UNCLIPPED_DEPTH_ORTHO_EMULATION
     out.unclipped_depth = out.position.z;
     out.position.z = min(out.position.z, 1.0);
 #endif
 #ifdef NORMAL_PREPASS_OR_DEFERRED_PREPASS
-    out.world_normal = normal_to_world(vertex.voxel, flipped(vertex.flip, in.normal));
+    out.world_normal = placed_normal(placed, in.normal);
 #endif
 #ifdef MOTION_VECTOR_PREPASS
     out.previous_world_position = out.world_position;

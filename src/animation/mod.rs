@@ -10,12 +10,13 @@ mod follow;
 
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
+use voxel_core::palette::ColorStage;
 use voxel_core::{VoxelModel, VoxelizeOptions};
 
 use crate::model::playback::{PoseRequest, Rig};
 use crate::model::{ModelLibrary, Playback, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::{Style, VoxelSettings};
+use crate::settings::{ColorSettings, Style, VoxelSettings};
 use crate::transition::TransitionSystems;
 use crate::voxelize::VoxelizeGeneration;
 
@@ -151,6 +152,7 @@ fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    colors: Res<ColorSettings>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
     mut jobs: Query<(Entity, &mut PoseJob)>,
     mut placed: MessageWriter<PosePlaced>,
@@ -168,7 +170,7 @@ fn finish_jobs(
         match voxels {
             Ok(model) => {
                 playback.counts.placed += 1;
-                if let Some(id) = place(playback, &mut models, model) {
+                if let Some(id) = place(playback, &mut models, model, &colors.0) {
                     placed.write(PosePlaced { model: id });
                 }
             }
@@ -182,21 +184,24 @@ fn finish_jobs(
     }
 }
 
-/// Puts a pose's voxels in the model: in place when the grid is the same (returns the asset), else as a new
-/// pose (the transition morphs to it).
+/// Puts a pose's voxels (as sampled) in the model, in the colours of `colors`: in place when the grid is the
+/// same (returns the asset), else as a new pose (the transition morphs to it).
 fn place(
     playback: &mut Playback,
     models: &mut Assets<VoxelModelAsset>,
     model: VoxelModel,
+    colors: &ColorStage,
 ) -> Option<AssetId<VoxelModelAsset>> {
+    let colored = VoxelModelAsset::colored(&model, colors);
+    playback.sampled = Some(model);
     if let Some(handle) = &playback.pose
         && let Some(mut shown) = models.get_mut(handle)
-        && shown.spec == model.spec
+        && shown.spec == colored.spec
     {
-        *shown = VoxelModelAsset(model);
+        *shown = colored;
         return Some(handle.id());
     }
-    playback.pose = Some(models.add(VoxelModelAsset(model)));
+    playback.pose = Some(models.add(colored));
     None
 }
 

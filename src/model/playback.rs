@@ -2,7 +2,7 @@
 //! (away while a pose job has it) and the voxels of its latest pose. The `animation` plugin plays it.
 
 use bevy::prelude::*;
-use voxel_core::{AnimatedModel, Bounds, ClipInfo, TriangleSoup};
+use voxel_core::{AnimatedModel, Bounds, ClipInfo, TriangleSoup, VoxelModel};
 
 use super::VoxelModelAsset;
 
@@ -61,8 +61,10 @@ pub struct Playback {
     pub due: Option<(usize, i64, u64)>,
     /// A pose asked for and not started yet (a job was running).
     pub pending: Option<PoseRequest>,
-    /// The voxels of the latest pose placed: what the model shows.
+    /// The voxels of the latest pose placed, in the colour stage's colours: what the model shows.
     pub pose: Option<Handle<VoxelModelAsset>>,
+    /// The latest pose placed as sampled (before the colour stage): a new palette recolours `pose` from it.
+    pub sampled: Option<VoxelModel>,
     /// Poses asked for, placed and dropped.
     pub counts: PoseCounts,
 }
@@ -82,6 +84,7 @@ impl Playback {
             due: None,
             pending: None,
             pose: None,
+            sampled: None,
             counts: PoseCounts::default(),
         }
     }

@@ -17,8 +17,10 @@ use std::time::{Duration, Instant};
 
 use color_quant::NeuQuant;
 
-/// How long the writer waits for a frame still missing once the recording has ended.
-const MISSING_FRAME_TIMEOUT: Duration = Duration::from_secs(20);
+/// How long the writer waits for a frame still missing once the recording has ended: a capture comes back two
+/// or three app frames after it is taken, and a headless run on a busy CPU's software renderer takes seconds
+/// a frame.
+const MISSING_FRAME_TIMEOUT: Duration = Duration::from_secs(120);
 /// The palette index of a pixel that keeps the previous frame's colour.
 const TRANSPARENT: u8 = 255;
 /// Pixels NeuQuant learns from at least (all of them when fewer): enough for a stable palette.

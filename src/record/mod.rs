@@ -289,9 +289,15 @@ fn toggle(
     }
 }
 
-/// Takes a screenshot of the record camera's image whenever a frame is due; ends the take after its last.
+/// Takes a screenshot of the record camera's image whenever a frame is due; ends the take the frame after its last.
 fn capture(mut commands: Commands, time: Res<Time>, mut recorder: ResMut<Recorder>, mut status: ResMut<RecordStatus>) {
     let Recorder::Recording(take) = &mut *recorder else { return };
+    if take.clock.done() {
+        // The camera lives one frame past the last screenshot: despawned with it, that frame comes back black.
+        let Recorder::Recording(take) = std::mem::take(&mut *recorder) else { return };
+        *recorder = end(&mut commands, *take, &mut status);
+        return;
+    }
     take.rendered += 1;
     if !take.cued || take.rendered <= WARM_UP_FRAMES {
         return;
@@ -308,10 +314,6 @@ fn capture(mut commands: Commands, time: Res<Time>, mut recorder: ResMut<Recorde
     }
     if let RecordStatus::Recording(_, seconds) = &mut *status {
         *seconds = elapsed.as_secs_f32();
-    }
-    if take.clock.done() {
-        let Recorder::Recording(take) = std::mem::take(&mut *recorder) else { return };
-        *recorder = end(&mut commands, *take, &mut status);
     }
 }
 

@@ -3,8 +3,11 @@
 //! settings → the core voxelizer → [`VoxelModelAsset`]s. A file with animation clips keeps its animation from
 //! the same read (the `animation` plugin poses it); a static file costs what it did. A settings change
 //! re-voxelizes every model, the one on screen first, and while a setting is dragged ([`SettingDrag`]) only that
-//! one; results of stale settings are dropped (latest wins). Once the core has read a file, Bevy's glTF loader
-//! is asked for it too, for its preview tile only.
+//! one; a stale job is cancelled (the core stops at its next stage) and its result dropped (latest wins). Jobs
+//! run their parallel work in [`job_pool`], which leaves a core to the frame, and report their stage to the
+//! model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
+//! only; a file of more than [`TILE_TRIANGLES`] triangles is not read again: its tile shows the surface of
+//! its first voxels, meshed on the worker.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -13,11 +16,17 @@ use std::time::Instant;
 use bevy::asset::AssetPath;
 use bevy::prelude::*;
 use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
-use voxel_core::{AnimatedModel, TriangleSoup, VoxelModel};
+use voxel_core::{AnimatedModel, Progress, Stage, TriangleSoup, VoxelModel};
 
+use crate::model::surface::surface_mesh;
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::schedule::AppSystems;
-use crate::settings::{SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
+use crate::threads::job_pool;
+
+/// Files with more triangles than this get a preview tile from their voxels instead of Bevy's glTF loader:
+/// reading such a file again and uploading its mesh would stall frames.
+pub const TILE_TRIANGLES: usize = 500_000;
 
 /// The voxelization systems (in `AppSystems::Simulate`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -36,6 +45,8 @@ pub struct VoxelizeJob {
     /// The settings generation it was started with.
     pub generation: u64,
     started: Instant,
+    /// Shared with the task: its stage, and the request to stop.
+    progress: Progress,
     task: Task<JobResult>,
 }
 
@@ -49,6 +60,8 @@ struct Imported {
     animation: Option<AnimatedModel>,
     /// Why the file's animation data was refused (the model then shows still).
     animation_error: Option<String>,
+    /// For a file of more than [`TILE_TRIANGLES`] triangles, read now: its preview tile.
+    tile: Option<Mesh>,
 }
 
 /// What a job starts from: the soup read before, or the file the core's importer reads first.
@@ -58,14 +71,23 @@ enum JobInput {
 }
 
 impl JobInput {
-    /// Imports (if needed) and voxelizes.
-    fn run(self, options: &voxel_core::VoxelizeOptions) -> JobResult {
-        let imported = match self {
-            JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None },
-            JobInput::File(path) => read(&path)?,
-        };
-        let model = voxel_core::voxelize(&imported.soup, options).map_err(|e| e.to_string())?;
-        Ok((imported, model))
+    /// Imports (if needed) and voxelizes in the job pool, reporting to `progress`.
+    fn run(self, options: &voxel_core::VoxelizeOptions, progress: &Progress) -> JobResult {
+        let first_read = matches!(self, JobInput::File(_));
+        job_pool().install(|| {
+            let mut imported = match self {
+                JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None, tile: None },
+                JobInput::File(path) => {
+                    progress.enter(Stage::Reading).map_err(|e| e.to_string())?;
+                    read(&path)?
+                }
+            };
+            let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
+            if first_read && imported.soup.triangle_count() > TILE_TRIANGLES {
+                imported.tile = Some(surface_mesh(&model));
+            }
+            Ok((imported, model))
+        })
     }
 }
 
@@ -77,7 +99,7 @@ fn read(path: &std::path::Path) -> Result<Imported, String> {
         Ok(model) => (model.rest_soup().clone(), Some(model), None),
         Err(e) => (voxel_core::load_file(path).map_err(|e| e.to_string())?, None, Some(e.to_string())),
     };
-    Ok(Imported { soup: Arc::new(soup), animation, animation_error })
+    Ok(Imported { soup: Arc::new(soup), animation, animation_error, tile: None })
 }
 
 /// Starts a new generation when voxelization settings change.
@@ -121,7 +143,8 @@ fn start_jobs(
             if job.generation == generation.0 {
                 running = true;
             } else {
-                // Dropping the task cancels it: latest settings win.
+                // Latest settings win: the core stops at its next stage, and the result is dropped unseen.
+                job.progress.cancel();
                 commands.entity(job_entity).despawn();
             }
         }
@@ -138,19 +161,25 @@ fn start_jobs(
             Some(soup) => JobInput::Read(soup.clone()),
             None => JobInput::File(entry.path.clone()),
         };
-        let task = pool.spawn(async move { input.run(&options) });
-        commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), task });
+        let progress = Progress::new();
+        entry.progress = progress.clone();
+        let watched = progress.clone();
+        let task = pool.spawn(async move { input.run(&options, &watched) });
+        commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), progress, task });
     }
 }
 
 /// Collects finished jobs: keeps the soup read, asks Bevy for the original glTF (for the preview) the first
-/// time, and stores the voxels; voxels of an older generation are dropped.
+/// time, and stores the voxels as sampled and in the colour stage's colours; voxels of an older generation are
+/// dropped.
 fn finish_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
     generation: Res<VoxelizeGeneration>,
+    colors: Res<ColorSettings>,
     asset_server: Res<AssetServer>,
     mut models: ResMut<Assets<VoxelModelAsset>>,
+    mut meshes: ResMut<Assets<Mesh>>,
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
@@ -165,7 +194,10 @@ fn finish_jobs(
                 warn!("{}: the animation is ignored: {reason}", entry.name);
                 entry.warning = Some(format!("the animation is ignored: {reason}"));
             }
-            entry.gltf = asset_server.load(AssetPath::parse(&entry.asset_path).into_owned());
+            match imported.tile.take() {
+                Some(tile) => entry.tile_mesh = Some(meshes.add(tile)),
+                None => entry.gltf = asset_server.load(AssetPath::parse(&entry.asset_path).into_owned()),
+            }
         }
         if job.generation != generation.0 {
             continue;
@@ -173,7 +205,8 @@ fn finish_jobs(
         match result {
             Ok((_, model)) => {
                 if let Some(entry) = library.entries.get_mut(job.entry) {
-                    entry.voxels = Some(models.add(VoxelModelAsset(model)));
+                    entry.voxels = Some(models.add(VoxelModelAsset::colored(&model, &colors.0)));
+                    entry.sampled = Some(Arc::new(model));
                     entry.voxels_generation = Some(job.generation);
                     entry.voxelize_ms = job.started.elapsed().as_secs_f32() * 1e3;
                     entry.status = ModelStatus::Ready;

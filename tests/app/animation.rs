@@ -304,30 +304,26 @@ fn the_morph_cube_shows_its_weights_pose() {
 
 /// A one-triangle .glb with a clip whose translation sampler has two keyframe times and one value.
 fn broken_clip_glb() -> Vec<u8> {
-    let floats: [f32; 14] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 2.0, 0.0, 0.0];
-    let bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
-    let json = serde_json::json!({
-        "asset": {"version": "2.0"},
-        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "animations": [{
-            "name": "slide",
-            "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
-            "samplers": [{"input": 1, "output": 2}]
-        }],
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
-            {"buffer": 0, "byteOffset": 36, "byteLength": 8},
-            {"buffer": 0, "byteOffset": 44, "byteLength": 12}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
-            {"bufferView": 1, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]},
-            {"bufferView": 2, "componentType": 5126, "count": 1, "type": "VEC3"}
-        ]
-    });
-    voxel_core::glb::pack(&serde_json::to_vec(&json).unwrap(), &bin).unwrap()
+    let bytes = |floats: &[f32]| floats.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let mut builder = voxel_core::glb::GlbBuilder::default();
+    let triangle = builder.accessor(
+        &bytes(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}),
+    );
+    let times = builder.accessor(
+        &bytes(&[0.0, 1.0]),
+        serde_json::json!({"componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]}),
+    );
+    let values = builder
+        .accessor(&bytes(&[2.0, 0.0, 0.0]), serde_json::json!({"componentType": 5126, "count": 1, "type": "VEC3"}));
+    let primitive = serde_json::json!({"attributes": {"POSITION": triangle}, "material": 0});
+    let (mut doc, bin) = builder.one_mesh("animation test", vec![primitive], serde_json::json!([{}]));
+    doc["animations"] = serde_json::json!([{
+        "name": "slide",
+        "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+        "samplers": [{"input": times, "output": values}]
+    }]);
+    voxel_core::glb::pack_document(&doc, &bin).unwrap()
 }
 
 #[test]

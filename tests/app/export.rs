@@ -84,7 +84,7 @@ fn ctrl_s_saves_the_hollow_model_shown_as_vox_and_glb() {
     app.world_mut().resource_mut::<ButtonInput<KeyCode>>().release(KeyCode::ControlLeft);
     assert_eq!(*app.world().resource::<State<Style>>().get(), Style::RoundedBoxes, "Ctrl+S is not S");
 
-    let ExportStatus::Saved(saved) = finished_export(&mut app) else {
+    let ExportStatus::Saved(saved, None) = finished_export(&mut app) else {
         panic!("{:?}", app.world().resource::<ExportStatus>())
     };
     let model = shown(&app);
@@ -94,7 +94,7 @@ fn ctrl_s_saves_the_hollow_model_shown_as_vox_and_glb() {
     assert!(model.len() < model.stats.voxels, "hollow: {} of {} voxels", model.len(), model.stats.voxels);
     assert_eq!(model.len(), model.stats.visible);
     assert_files_hold(&saved, &model, true);
-    let message = ExportStatus::Saved(saved.clone()).message().unwrap();
+    let message = ExportStatus::Saved(saved.clone(), None).message().unwrap();
     assert!(message.contains(&saved.glb.0.display().to_string()), "{message}");
 }
 
@@ -104,7 +104,7 @@ fn an_export_request_saves_solid_lego_cells() {
     let mut app = app_exporting_to(&dir, Style::Lego);
     app.world_mut().resource_mut::<VoxelSettings>().hollow = false;
     app.world_mut().write_message(ExportRequest);
-    let ExportStatus::Saved(saved) = finished_export(&mut app) else {
+    let ExportStatus::Saved(saved, None) = finished_export(&mut app) else {
         panic!("{:?}", app.world().resource::<ExportStatus>())
     };
     let model = shown(&app);
@@ -129,7 +129,7 @@ fn an_unwritable_folder_is_reported_and_the_app_goes_on() {
     let good: PathBuf = scratch.join("exports");
     app.world_mut().insert_resource(ExportDir(good.clone()));
     app.world_mut().write_message(ExportRequest);
-    let ExportStatus::Saved(saved) = finished_export(&mut app) else {
+    let ExportStatus::Saved(saved, None) = finished_export(&mut app) else {
         panic!("{:?}", app.world().resource::<ExportStatus>())
     };
     assert!(saved.glb.0.starts_with(&good) && saved.glb.0.is_file());

@@ -62,10 +62,21 @@ pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
     path
 }
 
-/// The voxelizer options the app uses now (its settings in its current style).
+/// The voxelizer options whose output the app shows now: its settings in its current style, and its colour
+/// stage as the core's pastel remap (the app's default) or no remap (the app samples colours and applies the
+/// stage afterwards, which for these two gives the same colours).
 pub fn app_options(app: &App) -> voxel_core::VoxelizeOptions {
+    use voxel_core::palette::Palette;
     let style = *app.world().resource::<State<voxel_art::settings::Style>>().get();
-    app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style)
+    let options = app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style);
+    let stage = &app.world().resource::<voxel_art::settings::ColorSettings>().0;
+    assert!(stage.max_colors.is_none() && !stage.dither, "no voxelizer option gives {stage:?}");
+    let pastel = match stage.palette {
+        Palette::Pastel => true,
+        Palette::Original => false,
+        Palette::Fixed { .. } => panic!("no voxelizer option gives {stage:?}"),
+    };
+    voxel_core::VoxelizeOptions { pastel, ..options }
 }
 
 /// Voxelizes a file with the core directly (the CLI's front door) for comparison.

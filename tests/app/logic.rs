@@ -134,12 +134,19 @@ fn the_app_voxelizes_every_corpus_model_as_the_cli_does() {
     assert!(files.len() >= 15, "{} corpus files", files.len());
     let mut app = test_app(AppArgs { models: files.clone(), no_shipped: true, ..default() });
     run_until(&mut app, Duration::from_secs(600), all_settled);
-    let options = app_options(&app);
+    // As the CLI does: voxelized with the colours as sampled, then the colour stage (`voxelize --palette
+    // pastel`; its colour count is of RGB colours, where the voxelizer's own remap counts RGBA ones).
+    let options = voxel_core::VoxelizeOptions { pastel: false, ..app_options(&app) };
+    let stage = app.world().resource::<voxel_art::settings::ColorSettings>().0.clone();
     let library = app.world().resource::<ModelLibrary>();
     assert_eq!(library.entries.len(), files.len());
     let mut ready = 0;
     for entry in &library.entries {
-        let core = voxel_core::load_file(&entry.path).and_then(|soup| voxel_core::voxelize(&soup, &options));
+        let core = voxel_core::load_file(&entry.path).and_then(|soup| {
+            let mut model = voxel_core::voxelize(&soup, &options)?;
+            stage.apply(&mut model)?;
+            Ok(model)
+        });
         match (&entry.status, core) {
             (ModelStatus::Ready, Ok(core_model)) => {
                 let app_model = entry.latest(app.world().resource::<Assets<VoxelModelAsset>>()).unwrap();

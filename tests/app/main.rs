@@ -1,12 +1,14 @@
 //! Integration tests of the voxel-art binary and app (one test binary).
 
 mod animation;
+mod big;
 mod cli;
 mod common;
 mod export;
 mod harness;
 mod logic;
 mod modules;
+mod palette;
 mod render;
 mod slider;
 mod styles;

@@ -69,6 +69,9 @@ pub enum VoxelError {
     /// A palette file could not be used.
     #[error("not a usable palette: {0}")]
     Palette(String),
+    /// The caller cancelled the run ([`crate::progress::Progress::cancel`]).
+    #[error("cancelled")]
+    Cancelled,
     /// Writing an export failed.
     #[error("cannot write {path}: {reason}")]
     Export {

@@ -1,38 +1,75 @@
 //! Writes a [`TriangleSoup`] as a binary glTF (.glb): one mesh, one primitive and material per part,
-//! flat normals, COLOR_0 where a part has vertex colours. Textures are not written. [`pack`] is the one
-//! place the core makes the .glb container (the export writes through it too).
+//! flat normals, COLOR_0 where a part has vertex colours. Textures are not written. [`GlbBuilder`] lays out
+//! the buffer, views and accessors of a one-mesh document (this writer's and the tests' scenes); [`pack`] is
+//! the one place the core makes the .glb container (the export writes through it too).
 
 use std::borrow::Cow;
 
 use crate::error::{Result, VoxelError};
 use crate::soup::TriangleSoup;
 
-/// Appends `values` as little-endian f32 and pads to 4 bytes (f32 is already aligned).
-fn push_f32s(bin: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
-    for v in values {
-        bin.extend_from_slice(&v.to_le_bytes());
+/// A glTF document being built over one binary buffer: every array added is a buffer view of its own with an
+/// accessor on it. [`GlbBuilder::one_mesh`] makes it a scene of one node showing one mesh.
+#[derive(Clone, Debug, Default)]
+pub struct GlbBuilder {
+    bin: Vec<u8>,
+    views: Vec<serde_json::Value>,
+    accessors: Vec<serde_json::Value>,
+}
+
+impl GlbBuilder {
+    /// Appends `bytes` (padded to 4 bytes) as a buffer view and `accessor` on it (its `bufferView` is set
+    /// here); returns the accessor's index.
+    pub fn accessor(&mut self, bytes: &[u8], mut accessor: serde_json::Value) -> usize {
+        self.views.push(serde_json::json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
+        self.bin.extend_from_slice(bytes);
+        self.bin.resize(self.bin.len().next_multiple_of(4), 0);
+        accessor["bufferView"] = serde_json::json!(self.views.len() - 1);
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
     }
+
+    /// The document of one node showing one mesh of `primitives` with `materials` (and the buffer, its views
+    /// and the accessors), written by `generator`; and the buffer. Callers add what else they need (textures,
+    /// animations, a buffer URI) before packing it with [`pack_document`] or writing it as .gltf.
+    pub fn one_mesh(
+        self,
+        generator: &str,
+        primitives: Vec<serde_json::Value>,
+        materials: serde_json::Value,
+    ) -> (serde_json::Value, Vec<u8>) {
+        let doc = serde_json::json!({
+            "asset": {"version": "2.0", "generator": generator},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": primitives}],
+            "materials": materials,
+            "buffers": [{"byteLength": self.bin.len()}],
+            "bufferViews": self.views,
+            "accessors": self.accessors,
+        });
+        (doc, self.bin)
+    }
+}
+
+/// Little-endian bytes of `f32`s.
+fn f32_bytes(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+    values.into_iter().flat_map(f32::to_le_bytes).collect()
 }
 
 /// Encodes `soup` as a .glb file.
 pub fn soup_to_glb(soup: &TriangleSoup) -> Result<Vec<u8>> {
-    let mut bin = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
+    let mut glb = GlbBuilder::default();
     let mut primitives = Vec::new();
-    let mut add_accessor =
-        |bin: &mut Vec<u8>, data: Vec<f32>, kind: &str, count: usize, bounds: Option<([f32; 3], [f32; 3])>| {
-            let offset = bin.len();
-            push_f32s(bin, data);
-            views.push(serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset}));
-            let mut accessor =
-                serde_json::json!({"bufferView": views.len() - 1, "componentType": 5126, "count": count, "type": kind});
+    let add_accessor =
+        |glb: &mut GlbBuilder, data: Vec<f32>, kind: &str, count: usize, bounds: Option<([f32; 3], [f32; 3])>| {
+            let mut accessor = serde_json::json!({"componentType": 5126, "count": count, "type": kind});
             if let Some((lo, hi)) = bounds {
                 accessor["min"] = serde_json::json!(lo);
                 accessor["max"] = serde_json::json!(hi);
             }
-            accessors.push(accessor);
-            accessors.len() - 1
+            glb.accessor(&f32_bytes(data), accessor)
         };
     for (p, part) in soup.parts.iter().enumerate() {
         let tris: Vec<usize> = (0..soup.triangle_count()).filter(|&t| soup.triangle_parts[t] as usize == p).collect();
@@ -60,12 +97,12 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Result<Vec<u8>> {
             })
             .collect();
         let mut attributes = serde_json::json!({
-            "POSITION": add_accessor(&mut bin, positions, "VEC3", corners.len(), Some((lo, hi))),
-            "NORMAL": add_accessor(&mut bin, normals, "VEC3", corners.len(), None),
+            "POSITION": add_accessor(&mut glb, positions, "VEC3", corners.len(), Some((lo, hi))),
+            "NORMAL": add_accessor(&mut glb, normals, "VEC3", corners.len(), None),
         });
         if corners.iter().any(|v| v.color != [1.0; 4]) {
             let colors = corners.iter().flat_map(|v| v.color).collect();
-            attributes["COLOR_0"] = serde_json::json!(add_accessor(&mut bin, colors, "VEC4", corners.len(), None));
+            attributes["COLOR_0"] = serde_json::json!(add_accessor(&mut glb, colors, "VEC4", corners.len(), None));
         }
         primitives.push(serde_json::json!({"attributes": attributes, "material": part.material}));
     }
@@ -74,19 +111,13 @@ pub fn soup_to_glb(soup: &TriangleSoup) -> Result<Vec<u8>> {
         .iter()
         .map(|m| serde_json::json!({"pbrMetallicRoughness": {"baseColorFactor": m.base_color, "metallicFactor": 0.0, "roughnessFactor": 0.8}}))
         .collect();
-    let doc = serde_json::json!({
-        "asset": {"version": "2.0", "generator": "voxel-core glb writer"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": primitives}],
-        "materials": materials,
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": views,
-        "accessors": accessors,
-    });
-    let json = serde_json::to_vec(&doc).map_err(encode_error)?;
-    pack(&json, &bin)
+    let (doc, bin) = glb.one_mesh("voxel-core glb writer", primitives, serde_json::json!(materials));
+    pack_document(&doc, &bin)
+}
+
+/// Packs a glTF document and its binary buffer into a .glb.
+pub fn pack_document(doc: &serde_json::Value, bin: &[u8]) -> Result<Vec<u8>> {
+    pack(&serde_json::to_vec(doc).map_err(encode_error)?, bin)
 }
 
 /// Packs glTF JSON and its binary buffer into the .glb container with the gltf crate's writer (the JSON

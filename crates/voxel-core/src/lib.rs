@@ -35,7 +35,8 @@
 //! * **Passes**: `columns` (column crossings and how they count), `orient` (closed parts and their facing:
 //!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`, `memory` (the budget).
 //! * **Leaf types**: [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the
-//!   input), [`grid`] (the grid, the bit grid), [`options`], [`bvh`], [`color`] (sampling, sRGB, pastel),
+//!   input), [`grid`] (the grid, the bit grid), [`options`], [`progress`] (stages, cancelling), [`bvh`],
+//!   [`color`] (sampling, sRGB, pastel),
 //!   [`model`] (the output), [`glb`].
 //!
 //! A soup keeps one value derived from its positions, the winding fill's closed parts, in a slot whose type
@@ -63,6 +64,7 @@ pub mod model;
 pub mod options;
 mod orient;
 pub mod palette;
+pub mod progress;
 mod radix;
 pub mod shapes;
 mod shell;
@@ -81,5 +83,6 @@ pub use grid::{BitGrid, GridSize, GridSpec};
 pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
 pub use model::{Voxel, VoxelModel, VoxelStats};
 pub use options::{FillMode, Method, ShellMode, VoxelizeOptions};
+pub use progress::{Progress, Stage};
 pub use soup::{Material, Part, Texture, TextureBinding, TriangleSoup, Vertex, Wrap};
-pub use voxelize::{voxelize, voxelize_within};
+pub use voxelize::{voxelize, voxelize_watched, voxelize_within};

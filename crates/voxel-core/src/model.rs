@@ -91,6 +91,14 @@ impl VoxelModel {
         self.len() == 0
     }
 
+    /// The bytes the model holds: its solid's bits (one a cell, none when hollow), and for each visible cell
+    /// its index, colour and part.
+    pub fn memory_bytes(&self) -> usize {
+        let solid = self.solid.as_ref().map_or(0, |bits| bits.len().div_ceil(64) * 8);
+        let visible = self.visible.len() * size_of::<u32>() + self.colors.len() * size_of::<([u8; 4], u32)>();
+        solid + visible + self.parts.iter().map(String::len).sum::<usize>()
+    }
+
     /// The same model with only its visible cells.
     pub fn hollowed(&self) -> VoxelModel {
         VoxelModel { solid: None, ..self.clone() }
@@ -243,6 +251,15 @@ mod tests {
         assert_eq!(spec.dims, [3, 3, 6]);
         let cells = (0..3u16).flat_map(|x| (0..3u16).flat_map(move |y| (0..6u16).map(move |z| [x, y, z])));
         VoxelModel::from_cells(spec, cells.map(|c| (c, [c[2] as u8 * 10, 0, 0, 255])))
+    }
+
+    #[test]
+    fn memory_counts_the_solid_bits_and_twelve_bytes_a_visible_cell() {
+        let m = block();
+        let parts: usize = m.parts.iter().map(String::len).sum();
+        assert_eq!(m.stats.visible, 50, "3 × 3 × 6 less its 1 × 1 × 4 core");
+        assert_eq!(m.hollowed().memory_bytes(), 50 * 12 + parts);
+        assert_eq!(m.memory_bytes(), 8 + 50 * 12 + parts, "54 cells fit one 64-bit word");
     }
 
     #[test]

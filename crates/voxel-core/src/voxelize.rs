@@ -13,6 +13,7 @@ use crate::memory;
 use crate::model::{VoxelModel, VoxelStats};
 use crate::options::{FillMode, ShellMode, VoxelizeOptions};
 use crate::orient::analyse_parts_if_unbalanced;
+use crate::progress::{Progress, Stage};
 use crate::radix;
 use crate::shell::{Shell, shell};
 use crate::soup::TriangleSoup;
@@ -23,6 +24,12 @@ pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelM
     voxelize_timed(soup, options).map(|(model, _)| model)
 }
 
+/// [`voxelize`], reporting each [`Stage`] it enters to `progress` and stopping with
+/// [`VoxelError::Cancelled`] at the next stage once `progress` is cancelled (from another thread).
+pub fn voxelize_watched(soup: &TriangleSoup, options: &VoxelizeOptions, progress: &Progress) -> Result<VoxelModel> {
+    voxelize_within_timed(soup, options, None, progress).map(|(model, _)| model)
+}
+
 /// Voxelizes `soup` in the grid fitted to `bounds` (min, max) instead of the soup's own bounds, so that
 /// every pose of an animation lands in the same cells ([`crate::AnimatedModel::clip_bounds`]). Parts of
 /// the soup outside `bounds` are clipped at the grid's edge.
@@ -31,7 +38,7 @@ pub fn voxelize_within(
     options: &VoxelizeOptions,
     bounds: ([f32; 3], [f32; 3]),
 ) -> Result<VoxelModel> {
-    voxelize_within_timed(soup, options, Some(bounds)).map(|(model, _)| model)
+    voxelize_within_timed(soup, options, Some(bounds), &Progress::new()).map(|(model, _)| model)
 }
 
 /// The wall time of the passes of one voxelization (for benchmarks).
@@ -53,7 +60,7 @@ pub struct PassTimes {
 
 /// [`voxelize`], also reporting how long its passes took.
 pub fn voxelize_timed(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<(VoxelModel, PassTimes)> {
-    voxelize_within_timed(soup, options, None)
+    voxelize_within_timed(soup, options, None, &Progress::new())
 }
 
 /// [`voxelize_within`], also reporting how long its passes took.
@@ -61,7 +68,9 @@ fn voxelize_within_timed(
     soup: &TriangleSoup,
     options: &VoxelizeOptions,
     bounds: Option<([f32; 3], [f32; 3])>,
+    progress: &Progress,
 ) -> Result<(VoxelModel, PassTimes)> {
+    progress.enter(Stage::Placing)?;
     let started = Instant::now();
     let bvh = OnceLock::new();
     // The winding fill's part analysis depends on the soup alone: when the soup's facing shows that the
@@ -76,6 +85,7 @@ fn voxelize_within_timed(
             let _settle = Settle(&settled);
             let (spec, tris) = prepare(soup, options, bounds)?;
             let prepared = started.elapsed();
+            progress.enter(Stage::Filling)?;
             let ((shell, shell_time), (fill, fill_time)) = rayon::join(
                 || timed(|| shell(&spec, &tris)),
                 || {
@@ -96,6 +106,7 @@ fn voxelize_within_timed(
         },
     );
     let (spec, tris, fill, shell, fill_time, shell_time) = passes?;
+    progress.enter(Stage::Coloring)?;
     let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
@@ -115,6 +126,7 @@ fn voxelize_within_timed(
     };
     let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
     let solid = (!options.hollow).then_some(solid);
+    progress.enter(Stage::Done)?;
     Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
 }
 

@@ -5,7 +5,7 @@ use crate::error::VoxelError;
 use crate::palette::{ColorStage, Palette};
 
 /// The colour options of `voxel-art voxelize`.
-#[derive(Debug, Default, clap::Args)]
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct PaletteArgs {
     /// Colour palette: original (as sampled), pastel, pico8, gameboy, magicavoxel, endesga32, sweetie16, or a
     /// palette file: .hex (one rrggbb a line, `;` comments), .png (its distinct pixels) or .vox (its palette).
@@ -26,10 +26,16 @@ pub struct PaletteArgs {
 impl PaletteArgs {
     /// The colour stage asked for, or the failing palette argument with the reason.
     pub fn stage(&self) -> Result<ColorStage, (String, VoxelError)> {
+        self.stage_or(Palette::Original)
+    }
+
+    /// The colour stage asked for, with `default` when no palette is named (the app's is pastel), or the
+    /// failing palette argument with the reason.
+    pub fn stage_or(&self, default: Palette) -> Result<ColorStage, (String, VoxelError)> {
         let palette = match (&self.palette, self.pastel) {
             (Some(arg), _) => Palette::from_arg(arg).map_err(|e| (arg.clone(), e))?,
             (None, true) => Palette::Pastel,
-            (None, false) => Palette::Original,
+            (None, false) => default,
         };
         if self.colors == Some(0) {
             return Err(("--colors".into(), VoxelError::Parameter("--colors must be at least 1".into())));

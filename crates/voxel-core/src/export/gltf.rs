@@ -7,8 +7,7 @@ use std::path::Path;
 
 use gltf::json::{self, validation::Checked::Valid, validation::USize64};
 
-use super::mesh::{Surface, surface};
-use crate::color::srgb_to_linear;
+use super::mesh::{SurfaceVertices, surface};
 use crate::error::{Result, VoxelError};
 use crate::grid::GridSpec;
 use crate::model::VoxelModel;
@@ -44,41 +43,6 @@ struct Document {
     root: json::Root,
     bin: Vec<u8>,
     stats: MeshStats,
-}
-
-/// The vertex and index data of a surface in normalized model space (four vertices per rectangle).
-struct Vertices {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    colors: Vec<[f32; 3]>,
-    indices: Vec<u32>,
-}
-
-impl Vertices {
-    fn of(model: &VoxelModel, surface: &Surface) -> Self {
-        let spec = &model.spec;
-        let n = surface.quads.len() * 4;
-        let mut out = Self {
-            positions: Vec::with_capacity(n),
-            normals: Vec::with_capacity(n),
-            colors: Vec::with_capacity(n),
-            indices: Vec::with_capacity(surface.quads.len() * 6),
-        };
-        for quad in &surface.quads {
-            let first = out.positions.len() as u32;
-            let color = quad.color.map(srgb_to_linear);
-            for corner in quad.corners {
-                // In f64 so that a corner is the nearest f32 to its exact place.
-                out.positions.push(std::array::from_fn(|a| {
-                    (f64::from(spec.origin[a]) + f64::from(corner[a]) * f64::from(spec.cell[a])) as f32
-                }));
-                out.normals.push(quad.normal.map(|c| c as f32));
-                out.colors.push(color);
-            }
-            out.indices.extend([0, 1, 2, 0, 2, 3].map(|k| first + k));
-        }
-        out
-    }
 }
 
 /// Accumulates a glTF document: its binary buffer, views, accessors, meshes and their shared material.
@@ -224,7 +188,7 @@ impl Builder {
     /// with what it holds (`bytes` 0).
     pub fn mesh(&mut self, model: &VoxelModel, name: &str) -> (Option<json::Index<json::Mesh>>, MeshStats) {
         let surface = surface(model);
-        let vertices = Vertices::of(model, &surface);
+        let vertices = SurfaceVertices::of(model, &surface);
         let mesh = (!surface.quads.is_empty()).then(|| {
             let attributes = BTreeMap::from([
                 (Valid(json::mesh::Semantic::Positions), self.vec3s(&vertices.positions, true, true)),
@@ -371,6 +335,7 @@ fn uri_escape(name: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::color::srgb_to_linear;
     use crate::export::mesh::tests::model_of;
 
     /// The bottom layer of [`model_of`]`(k)`'s grid, 8k × 8k cells, in a checkerboard of two colours (nothing

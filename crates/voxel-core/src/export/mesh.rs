@@ -6,6 +6,7 @@
 //! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
 //! rectangle of the row before when it spans the same columns in the same colour.
 
+use crate::color::srgb_to_linear;
 use crate::model::VoxelModel;
 
 /// One rectangle of the surface, all of one colour.
@@ -184,6 +185,46 @@ pub fn surface(model: &VoxelModel) -> Surface {
         }
     }
     out
+}
+
+/// The vertex and index data of a surface in normalized model space (four vertices per rectangle).
+pub struct SurfaceVertices {
+    /// Corner positions.
+    pub positions: Vec<[f32; 3]>,
+    /// The rectangle's outward normal, per corner.
+    pub normals: Vec<[f32; 3]>,
+    /// The rectangle's linear RGB colour, per corner.
+    pub colors: Vec<[f32; 3]>,
+    /// Two triangles per rectangle.
+    pub indices: Vec<u32>,
+}
+
+impl SurfaceVertices {
+    /// The vertices of `surface`, the surface of `model`.
+    pub fn of(model: &VoxelModel, surface: &Surface) -> Self {
+        let spec = &model.spec;
+        let n = surface.quads.len() * 4;
+        let mut out = Self {
+            positions: Vec::with_capacity(n),
+            normals: Vec::with_capacity(n),
+            colors: Vec::with_capacity(n),
+            indices: Vec::with_capacity(surface.quads.len() * 6),
+        };
+        for quad in &surface.quads {
+            let first = out.positions.len() as u32;
+            let color = quad.color.map(srgb_to_linear);
+            for corner in quad.corners {
+                // In f64 so that a corner is the nearest f32 to its exact place.
+                out.positions.push(std::array::from_fn(|a| {
+                    (f64::from(spec.origin[a]) + f64::from(corner[a]) * f64::from(spec.cell[a])) as f32
+                }));
+                out.normals.push(quad.normal.map(|c| c as f32));
+                out.colors.push(color);
+            }
+            out.indices.extend([0, 1, 2, 0, 2, 3].map(|k| first + k));
+        }
+        out
+    }
 }
 
 #[cfg(test)]

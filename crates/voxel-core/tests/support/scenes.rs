@@ -5,7 +5,7 @@
 
 #![allow(dead_code)] // each including target uses its own subset
 
-use voxel_core::glb::pack;
+use voxel_core::glb::{GlbBuilder, pack_document};
 
 /// Spheres per primitive.
 pub const SPHERES_PER_PRIMITIVE: usize = 64;
@@ -121,17 +121,7 @@ pub fn height_field(n: u32) -> Primitive {
 /// Encodes `primitives` as one mesh of a one-node .glb: per primitive a POSITION (VEC3, with bounds), a
 /// COLOR_0 (float VEC4) and a `u32` index accessor, each in its own buffer view, and one plain material.
 pub fn to_glb(primitives: &[Primitive]) -> Vec<u8> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut add = |bin: &mut Vec<u8>, bytes: &[u8], accessor: serde_json::Value| {
-        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
-        bin.extend_from_slice(bytes);
-        let mut accessor = accessor;
-        accessor["bufferView"] = serde_json::json!(views.len() - 1);
-        accessors.push(accessor);
-        accessors.len() - 1
-    };
+    let mut glb = GlbBuilder::default();
     let mut json_primitives = Vec::new();
     for prim in primitives {
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
@@ -142,18 +132,15 @@ pub fn to_glb(primitives: &[Primitive]) -> Vec<u8> {
             }
         }
         let count = prim.positions.len();
-        let position = add(
-            &mut bin,
+        let position = glb.accessor(
             &le_bytes(prim.positions.iter().flatten().map(|v| v.to_bits())),
             serde_json::json!({"componentType": 5126, "count": count, "type": "VEC3", "min": lo, "max": hi}),
         );
-        let color = add(
-            &mut bin,
+        let color = glb.accessor(
             &le_bytes(prim.colors.iter().flatten().map(|v| v.to_bits())),
             serde_json::json!({"componentType": 5126, "count": count, "type": "VEC4"}),
         );
-        let index = add(
-            &mut bin,
+        let index = glb.accessor(
             &le_bytes(prim.indices.iter().copied()),
             serde_json::json!({"componentType": 5125, "count": prim.indices.len(), "type": "SCALAR"}),
         );
@@ -163,18 +150,9 @@ pub fn to_glb(primitives: &[Primitive]) -> Vec<u8> {
             "material": 0,
         }));
     }
-    let doc = serde_json::json!({
-        "asset": {"version": "2.0", "generator": "voxel-core generated scene"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": json_primitives}],
-        "materials": [{"pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.8}}],
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": views,
-        "accessors": accessors,
-    });
-    pack(&serde_json::to_vec(&doc).expect("JSON"), &bin).expect("a .glb under 4 GiB")
+    let material = serde_json::json!([{"pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.8}}]);
+    let (doc, bin) = glb.one_mesh("voxel-core generated scene", json_primitives, material);
+    pack_document(&doc, &bin).expect("a .glb under 4 GiB")
 }
 
 /// Little-endian bytes of 32-bit words.

@@ -47,7 +47,7 @@ pub fn tilted(mut mesh: IndexedMesh, angle: f32) -> IndexedMesh {
 
 /// Packs a JSON document and a binary chunk into a .glb.
 pub fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    voxel_core::glb::pack(&serde_json::to_vec(json).unwrap(), bin).unwrap()
+    voxel_core::glb::pack_document(json, bin).unwrap()
 }
 
 /// A unit cube (8 positions, 36 u16 indices) as little-endian bytes, positions first.

@@ -12,6 +12,7 @@ mod export;
 mod fine;
 mod gltf_export;
 mod meshopt;
+mod progress;
 mod read;
 mod scale;
 mod shapes;

@@ -3,6 +3,7 @@
 //! same cells as the PNG original and the same colours.
 
 use serde_json::{Value, json};
+use voxel_core::glb::GlbBuilder;
 use voxel_core::{VoxelModel, load_slice, voxelize};
 
 use crate::common::{at_resolution, cells, glb, model};
@@ -93,44 +94,29 @@ fn a_webp_source_that_is_not_an_image_is_named() {
 /// A unit square textured with `image` (a file of tests/data): a .gltf whose buffer is a data URI.
 fn textured_square(image: &str, webp: bool) -> Vec<u8> {
     use base64::Engine;
-    let mut bin = Vec::new();
     let corners = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 1.0], [0.0, 0.0, 1.0]];
-    for c in corners.iter().flatten() {
-        bin.extend_from_slice(&c.to_le_bytes());
-    }
-    for [x, _, z] in corners {
-        bin.extend_from_slice(&x.to_le_bytes());
-        bin.extend_from_slice(&z.to_le_bytes());
-    }
-    for i in [0u16, 2, 1, 0, 3, 2, 0, 0] {
-        bin.extend_from_slice(&i.to_le_bytes());
-    }
+    let mut builder = GlbBuilder::default();
+    let position = builder.accessor(
+        &corners.iter().flatten().flat_map(|c| c.to_le_bytes()).collect::<Vec<u8>>(),
+        json!({"componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]}),
+    );
+    let uv = builder.accessor(
+        &corners.iter().flat_map(|[x, _, z]| [x.to_le_bytes(), z.to_le_bytes()]).flatten().collect::<Vec<u8>>(),
+        json!({"componentType": 5126, "count": 4, "type": "VEC2"}),
+    );
+    let indices = builder.accessor(
+        &[0u16, 2, 1, 0, 3, 2].iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>(),
+        json!({"componentType": 5123, "count": 6, "type": "SCALAR"}),
+    );
+    let primitive = json!({"attributes": {"POSITION": position, "TEXCOORD_0": uv}, "indices": indices, "material": 0});
+    let material = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    let (mut doc, bin) = builder.one_mesh("webp test", vec![primitive], material);
     let texture = if webp { json!({"extensions": {"EXT_texture_webp": {"source": 0}}}) } else { json!({"source": 0}) };
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "extensionsUsed": if webp { json!(["EXT_texture_webp"]) } else { json!([]) },
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
-        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
-        "textures": [texture],
-        "images": [{"uri": image}],
-        "buffers": [{
-            "byteLength": bin.len(),
-            "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))
-        }],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-            {"buffer": 0, "byteOffset": 80, "byteLength": 12}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]},
-            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
-        ]
-    });
+    doc["extensionsUsed"] = if webp { json!(["EXT_texture_webp"]) } else { json!([]) };
+    doc["textures"] = json!([texture]);
+    doc["images"] = json!([{"uri": image}]);
+    let data = base64::engine::general_purpose::STANDARD.encode(&bin);
+    doc["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{data}"));
     serde_json::to_vec(&doc).unwrap()
 }
 
