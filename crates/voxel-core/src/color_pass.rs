@@ -25,6 +25,9 @@ const FACE_STEPS: [[i32; 3]; 6] = [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0],
 /// Visible cells handed to one task of the colour pass.
 const CELLS_PER_TASK: usize = 1024;
 
+/// Far cells handed to one task of [`nearest_far`].
+const FAR_PER_TASK: usize = 64;
+
 /// The colour of a cell that no triangle can colour (every triangle has zero area), and its part.
 const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
 
@@ -154,22 +157,30 @@ fn nearest_far(
     bvh: &OnceLock<TriangleBvh>,
     cells: &[u32],
 ) -> Vec<Option<(usize, [f64; 3])>> {
-    let far: Box<dyn Fn(DVec3) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
+    // Each lookup gets the nearest triangle of the cell before it (in the same task): a far cell's neighbour's
+    // nearest triangle is close to its own, and a close first guess prunes most of the walk.
+    let far: Box<dyn Fn(DVec3, Option<usize>) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
         let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
         let has_area = |t: &GridTriangle| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0;
-        Box::new(move |p| {
+        Box::new(move |p, _| {
             let d2 = |t: usize| if has_area(&tris[t]) { distance2(p, &tris[t]) } else { f64::INFINITY };
             bvh.nearest(p, d2).filter(|n| n.1.is_finite()).map(|n| n.0)
         })
     } else {
-        let octree = ShellOctree::new(spec, shell);
-        Box::new(move |p| octree.nearest(tris, p))
+        let octree = ShellOctree::new(spec, shell, tris);
+        Box::new(move |p, guess| octree.nearest(tris, p, guess))
     };
+    let far = &far;
     cells
-        .par_iter()
-        .map(|&i| {
-            let p = centre(spec.coords(i as usize));
-            far(p).map(|t| (t, closest_point_barycentric(p, &tris[t])))
+        .par_chunks(FAR_PER_TASK)
+        .flat_map_iter(|chunk| {
+            let mut guess = None;
+            chunk.iter().map(move |&i| {
+                let p = centre(spec.coords(i as usize));
+                let nearest = far(p, guess);
+                guess = nearest.or(guess);
+                nearest.map(|t| (t, closest_point_barycentric(p, &tris[t])))
+            })
         })
         .collect()
 }

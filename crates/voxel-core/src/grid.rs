@@ -2,6 +2,7 @@
 //! cell count a grid may have (the voxelizer's budget is memory: `memory.rs`), and a packed bit set over cells.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::error::{Result, VoxelError};
 use crate::geom::GridTriangle;
@@ -225,7 +226,7 @@ impl GridSpec {
     /// Every triangle of `soup` in grid coordinates.
     pub fn grid_triangles(&self, soup: &TriangleSoup) -> Vec<GridTriangle> {
         soup.vertices()
-            .chunks_exact(3)
+            .par_chunks_exact(3)
             .map(|t| [self.to_grid(t[0].position), self.to_grid(t[1].position), self.to_grid(t[2].position)])
             .collect()
     }

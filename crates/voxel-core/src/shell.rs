@@ -26,14 +26,6 @@ pub(crate) struct Shell {
 }
 
 impl Shell {
-    /// The triangles overlapping cell `index` (empty when it is not a shell cell).
-    pub fn triangles_of(&self, index: usize) -> &[u32] {
-        match self.cells.binary_search(&(index as u32)) {
-            Ok(k) => self.triangles_at(k),
-            Err(_) => &[],
-        }
-    }
-
     /// The triangles overlapping the `k`-th shell cell, `cells[k]`.
     pub fn triangles_at(&self, k: usize) -> &[u32] {
         &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize]
