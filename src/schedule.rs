@@ -18,19 +18,26 @@
 //!   (bevy_tweening's set), then the voxels' tweens step with this frame's spin and count, and recoloured
 //!   voxels take their colours; bubbles (given, then burst) and animated models' voxels follow once the
 //!   transition has moved and coloured the voxels.
-//! - Present: the lights follow the camera before the floor settles under the model; preview tiles spawn,
-//!   are laid out and turned, then rigged and played; a recording takes its cue, toggles, captures a due
-//!   frame, then reports.
+//! - Present, in turn (each moves what the next shows): the lights follow the camera before the floor settles
+//!   under the model; preview tiles spawn, are laid out and turned, then rigged and played; a recording takes
+//!   its cue, toggles, captures a due frame, then reports; last, a screenshot run's driver.
 //!
-//! `PostUpdate`: after Bevy propagates transforms, the chunk meshes are rebuilt for a new shape, the changed
+//! `PostUpdate`: after Bevy propagates transforms and updates the cameras (the detail reads their projection)
+//! and after the panel's pass, before the asset events (a rebuilt chunk mesh is announced this frame) and
+//! before Bevy's visibility and bounds (which read the chunks' `Visibility` and `Mesh3d`), the chunk meshes are rebuilt for a new shape, the changed
 //! voxels gathered into the buffer's mirror, the detail chosen for the voxels' width on screen, then the chunk
 //! entities fitted to the pool (what the renderer extracts). `Render`: a new buffer's contents are written once
 //! Bevy has prepared the buffer (`RenderSystems::PrepareResources`).
 
 use std::time::Duration;
 
+use bevy::app::TerminalCtrlCHandlerPlugin;
+use bevy::asset::AssetEventSystems;
+use bevy::camera::CameraUpdateSystems;
+use bevy::camera::visibility::VisibilitySystems;
 use bevy::prelude::*;
 use bevy::render::{Render, RenderApp, RenderSystems};
+use bevy_egui::EguiPostUpdateSet;
 use bevy_tweening::AnimationSystem;
 
 /// The fixed simulation step (60 per second).
@@ -212,6 +219,10 @@ pub enum RecordSystems {
     Report,
 }
 
+/// The screenshot's driver (in `AppSystems::Present`, last: it saves what the frame's other systems made).
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ScreenshotSystems;
+
 /// Configures every set above.
 pub(super) struct SchedulePlugin;
 
@@ -219,9 +230,12 @@ impl Plugin for SchedulePlugin {
     fn build(&self, app: &mut App) {
         use AppSystems as A;
         use InstancingSystems as I;
+        // Bevy's Ctrl+C handler writes `AppExit` as our keys and captures do: it goes first.
         app.configure_sets(
             Update,
-            (A::Pointer, A::Input, A::Color, A::Simulate, A::Animate, A::Sync, A::Present).chain(),
+            (A::Pointer, A::Input, A::Color, A::Simulate, A::Animate, A::Sync, A::Present)
+                .chain()
+                .after(TerminalCtrlCHandlerPlugin::exit_on_flag),
         );
         app.configure_sets(Update, (PaletteSystems::Read, PaletteSystems::Recolor).chain().in_set(A::Color));
         app.configure_sets(
@@ -286,13 +300,21 @@ impl Plugin for SchedulePlugin {
                 (StageSystems::Lights, StageSystems::Floor).chain(),
                 (PreviewSystems::Spawn, PreviewSystems::Layout, PreviewSystems::Rig, PreviewSystems::Play).chain(),
                 (RecordSystems::Cue, RecordSystems::Toggle, RecordSystems::Capture, RecordSystems::Report).chain(),
+                ScreenshotSystems,
             )
+                .chain()
                 .in_set(A::Present),
         );
         app.configure_sets(FixedUpdate, StyleSystems::Fall.in_set(A::Simulate));
         app.configure_sets(
             PostUpdate,
-            (I::Meshes, I::Gather, I::Detail, I::Chunks).chain().after(TransformSystems::Propagate),
+            (I::Meshes, I::Gather, I::Detail, I::Chunks)
+                .chain()
+                .after(TransformSystems::Propagate)
+                .after(CameraUpdateSystems)
+                .after(EguiPostUpdateSet::EndPass)
+                .before(AssetEventSystems)
+                .before(VisibilitySystems::VisibilityPropagate),
         );
         app.insert_resource(Time::<Fixed>::from_duration(FIXED_STEP));
     }

@@ -18,7 +18,7 @@ use crate::camera::MainCamera;
 use crate::cue::{Cue, CueParams, CueState};
 use crate::instancing::VoxelPool;
 use crate::model::VoxelModelAsset;
-use crate::schedule::AppSystems;
+use crate::schedule::ScreenshotSystems;
 use crate::settings::VoxelSettings;
 use crate::stage::{Floor, KeyLight};
 
@@ -232,7 +232,7 @@ impl Plugin for ScreenshotPlugin {
         // slowly a software renderer draws.
         app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(crate::schedule::FIXED_STEP));
         app.insert_resource(self.clone());
-        app.add_systems(Update, drive.in_set(AppSystems::Present));
+        app.add_systems(Update, drive.in_set(ScreenshotSystems));
     }
 }
 
