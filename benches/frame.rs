@@ -224,7 +224,7 @@ fn fox_running() {
 }
 
 /// Moves the cursor ray on a circle of radius 1.5 across the model's front, one turn in 2 s.
-fn circling_cursor(time: Res<Time>, mut ray: ResMut<voxel_art::input::CursorRay>) {
+fn circling_cursor(time: Res<Time>, mut ray: ResMut<voxel_art::style::CursorRay>) {
     let angle = time.elapsed_secs() * std::f32::consts::PI;
     ray.0 = Some(Ray3d::new(Vec3::new(angle.cos() * 1.5, angle.sin() * 1.5, 30.0), Dir3::NEG_Z));
 }

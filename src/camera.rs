@@ -59,14 +59,14 @@ fn cursor_ray(
     camera: Query<(&Camera, &GlobalTransform), With<MainCamera>>,
     over: Res<crate::input::PointerOverUi>,
     pointer: Res<crate::input::StagePointer>,
-    mut ray: ResMut<crate::input::CursorRay>,
+    mut ray: ResMut<crate::style::CursorRay>,
 ) {
     let found = (|| {
         let cursor = window.single().ok()?.cursor_position()?;
         let (camera, transform) = camera.single().ok()?;
         camera.viewport_to_world(transform, cursor).ok()
     })();
-    ray.set_if_neq(crate::input::CursorRay(found.filter(|_| !over.any() && pointer.active)));
+    ray.set_if_neq(crate::style::CursorRay(found.filter(|_| !over.any() && pointer.active)));
 }
 
 pub(super) fn plugin(app: &mut App) {

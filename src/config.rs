@@ -16,7 +16,8 @@ use crate::input::PointerMode;
 use crate::library::LibrarySetup;
 use crate::record::{DEFAULT_SECONDS, HeadlessRecord, RecordPlugin, RecordSize};
 use crate::screenshot::ScreenshotPlugin;
-use crate::settings::{ColorSettings, Style, VoxelSettings};
+use crate::settings::{ColorSettings, VoxelSettings};
+use crate::style::Style;
 use crate::transition::{Assignment, TransitionSettings};
 
 /// The whole command line: the app's arguments, or a subcommand.

@@ -17,7 +17,8 @@ use voxel_core::{TriangleSoup, VoxelError, VoxelizeOptions, voxelize_within};
 use crate::model::playback::POSES_PER_SECOND;
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::schedule::ExportSystems;
-use crate::settings::{ColorSettings, Style, VoxelSettings};
+use crate::settings::{ColorSettings, VoxelSettings};
+use crate::style::Style;
 
 /// The folder exports go to when `--export-dir` is not given.
 pub const DEFAULT_EXPORT_DIR: &str = "voxel-art-exports";
@@ -131,7 +132,7 @@ fn start_export(
     let clip = entry.animation.as_ref().map(|playback| ClipExport {
         file: entry.path.clone(),
         clip: playback.clip,
-        options: settings.voxelize_options(*style.get()),
+        options: settings.voxelize_options(style.get().cell_height_ratio()),
         colors: colors.0.clone(),
     });
     let dir = dir.0.clone();

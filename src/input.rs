@@ -11,7 +11,8 @@ use crate::animation::AnimationRequest;
 use crate::export::ExportRequest;
 use crate::library::LibraryRequest;
 use crate::schedule::InputSystems;
-use crate::settings::{PanelOpen, RepelSettings, Style};
+use crate::settings::{PanelOpen, RepelSettings};
+use crate::style::{Style, ToggleFall};
 
 /// A press shorter than this (and without dragging) is a click, not an orbit.
 pub const CLICK_MAX_SECONDS: f32 = 0.25;
@@ -77,14 +78,6 @@ impl StagePointer {
         };
     }
 }
-
-/// The ray under the mouse cursor in world space, when the cursor is over the stage (set by the camera).
-#[derive(Resource, Debug, Default, Clone, Copy, PartialEq)]
-pub struct CursorRay(pub Option<Ray3d>);
-
-/// F: drop the voxels or call them back (the falling style acts on it).
-#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ToggleFall;
 
 /// Ctrl+R (or the panel's button): start recording the stage as a GIF, or stop (the record plugin acts on it).
 #[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
@@ -215,11 +208,9 @@ fn click_to_next(mut clicks: MessageReader<StageClick>, mut requests: MessageWri
 
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<PointerOverUi>();
-    app.init_resource::<CursorRay>();
     app.init_resource::<PointerMode>();
     app.init_resource::<StagePointer>();
     app.add_message::<StageClick>();
-    app.add_message::<ToggleFall>();
     app.add_message::<ToggleRecord>();
     app.add_systems(
         Update,

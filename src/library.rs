@@ -1,13 +1,13 @@
 //! The library plugin: fills the model list (shipped models, command-line paths, dropped files) and handles the
 //! requests that change the pick.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use bevy::prelude::*;
 use bevy::window::FileDragAndDrop;
 
-use crate::assets::{asset_root, file_asset_path};
-use crate::model::{ModelEntry, ModelLibrary, ModelStatus};
+use crate::assets::asset_root;
+use crate::model::ModelLibrary;
 use crate::palette::is_palette_file;
 use crate::schedule::LibrarySystems;
 
@@ -39,51 +39,6 @@ pub enum LibraryRequest {
     Previous,
     /// Add a file or folder and show (the first of) it.
     Add(PathBuf),
-}
-
-impl ModelLibrary {
-    /// Adds the model file `path` (shown through `asset_path` in its preview); returns its index.
-    pub fn add(&mut self, name: String, path: PathBuf, asset_path: String) -> usize {
-        if let Some(i) = self.entries.iter().position(|e| e.asset_path == asset_path) {
-            return i;
-        }
-        self.entries.push(ModelEntry::new(name, path, asset_path, ModelStatus::Loading));
-        self.entries.len() - 1
-    }
-
-    /// Adds a file or every model in a folder; returns the index of the first added. A path that is
-    /// neither becomes a failed entry, so the panel shows why.
-    pub fn add_path(&mut self, path: &Path) -> Option<usize> {
-        let files =
-            if path.is_dir() { voxel_core::files::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
-        let mut first = None;
-        for file in files {
-            let name =
-                file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
-            let index = if !file.is_file() {
-                self.fail_entry(name, &file, format!("cannot read {}: no such file", file.display()))
-            } else if !voxel_core::files::is_model_file(&file) {
-                self.fail_entry(name, &file, format!("{} is not a .glb or .gltf file", file.display()))
-            } else {
-                let asset_path = file_asset_path(&file);
-                self.add(name, file, asset_path)
-            };
-            first.get_or_insert(index);
-        }
-        if first.is_none() {
-            self.last_error = Some(format!("no .glb or .gltf files in {}", path.display()));
-            warn!("no .glb or .gltf files in {}", path.display());
-        }
-        first
-    }
-
-    fn fail_entry(&mut self, name: String, file: &Path, reason: String) -> usize {
-        warn!("{name}: {reason}");
-        self.last_error = Some(format!("{name}: {reason}"));
-        let asset_path = file_asset_path(file);
-        self.entries.push(ModelEntry::new(name, file.to_owned(), asset_path, ModelStatus::Failed(reason)));
-        self.entries.len() - 1
-    }
 }
 
 /// Adds the shipped models and the command-line ones; a start index past the list is an error that ends the

@@ -1,18 +1,20 @@
-//! The models as data: the list the app cycles through, each model's status, its voxelization (the
-//! [`VoxelModelAsset`]) and the one lookup of "the current model, if it is ready". No systems live here: the
-//! `library` plugin fills the list, `voxelize` turns its entries into voxels, `animation` poses animated ones,
-//! the rest read it.
+//! The models as data: the list the app cycles through ([`ModelLibrary`], all of its methods: adding files,
+//! failing entries, the one lookup of "the current model, if it is ready"), each model's status and its
+//! voxelization (the [`VoxelModelAsset`]). No systems live here: the `library` plugin fills the list,
+//! `voxelize` turns its entries into voxels, `animation` poses animated ones, the rest read it.
 
 pub mod playback;
 pub mod surface;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use bevy::gltf::Gltf;
 use bevy::prelude::*;
 use voxel_core::palette::ColorStage;
 use voxel_core::{Progress, TriangleSoup, Voxel, VoxelModel};
+
+use crate::assets::file_asset_path;
 
 pub use playback::Playback;
 
@@ -167,6 +169,49 @@ impl ModelLibrary {
         let entry = self.current_entry().filter(|e| e.status == ModelStatus::Ready)?;
         let handle = entry.shown_handle()?;
         models.get(handle).map(|m| (handle.id(), m))
+    }
+
+    /// Adds the model file `path` (shown through `asset_path` in its preview); returns its index.
+    pub fn add(&mut self, name: String, path: PathBuf, asset_path: String) -> usize {
+        if let Some(i) = self.entries.iter().position(|e| e.asset_path == asset_path) {
+            return i;
+        }
+        self.entries.push(ModelEntry::new(name, path, asset_path, ModelStatus::Loading));
+        self.entries.len() - 1
+    }
+
+    /// Adds a file or every model in a folder; returns the index of the first added. A path that is
+    /// neither becomes a failed entry, so the panel shows why.
+    pub fn add_path(&mut self, path: &Path) -> Option<usize> {
+        let files =
+            if path.is_dir() { voxel_core::files::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
+        let mut first = None;
+        for file in files {
+            let name =
+                file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
+            let index = if !file.is_file() {
+                self.add_failed(name, &file, format!("cannot read {}: no such file", file.display()))
+            } else if !voxel_core::files::is_model_file(&file) {
+                self.add_failed(name, &file, format!("{} is not a .glb or .gltf file", file.display()))
+            } else {
+                let asset_path = file_asset_path(&file);
+                self.add(name, file, asset_path)
+            };
+            first.get_or_insert(index);
+        }
+        if first.is_none() {
+            self.last_error = Some(format!("no .glb or .gltf files in {}", path.display()));
+            warn!("no .glb or .gltf files in {}", path.display());
+        }
+        first
+    }
+
+    /// Adds an entry for a file that cannot be a model, failed with `reason`; returns its index.
+    fn add_failed(&mut self, name: String, file: &Path, reason: String) -> usize {
+        self.entries.push(ModelEntry::new(name, file.to_owned(), file_asset_path(file), ModelStatus::Loading));
+        let index = self.entries.len() - 1;
+        self.fail(index, reason);
+        index
     }
 
     /// Records that entry `index` failed.

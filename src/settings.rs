@@ -4,48 +4,6 @@ use bevy::prelude::*;
 use voxel_core::palette::{ColorStage, Palette};
 use voxel_core::{FillMode, GridSize, VoxelizeOptions};
 
-/// How voxels look and move: a Bevy state. Each style sets itself up on entering it and tears itself down on
-/// leaving (see the `style` plugin); S cycles them, the panel picks one, `--style` starts in one.
-#[derive(States, Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect, clap::ValueEnum)]
-pub enum Style {
-    /// Rounded boxes (the article's look).
-    #[default]
-    #[value(name = "boxes")]
-    RoundedBoxes,
-    /// Lego bricks: studs on top, cells 1.2× taller than wide, shiny plastic.
-    Lego,
-    /// Glossy bubbles that wobble and burst near the cursor.
-    Bubbles,
-    /// Voxels drop, bounce and pile up on the floor; F (or another model) reassembles them.
-    Falling,
-}
-
-impl Style {
-    /// Every style, in the order the panel lists them (and S cycles).
-    pub const ALL: [Style; 4] = [Style::RoundedBoxes, Style::Lego, Style::Bubbles, Style::Falling];
-
-    /// The panel's label.
-    pub fn label(self) -> &'static str {
-        match self {
-            Style::RoundedBoxes => "Rounded boxes",
-            Style::Lego => "Lego bricks",
-            Style::Bubbles => "Bubbles",
-            Style::Falling => "Falling",
-        }
-    }
-
-    /// The next style (S key).
-    pub fn next(self) -> Style {
-        let i = Style::ALL.iter().position(|s| *s == self).unwrap_or(0);
-        Style::ALL[(i + 1) % Style::ALL.len()]
-    }
-
-    /// Cell height over cell width for this style.
-    pub fn cell_height_ratio(self) -> f32 {
-        if self == Style::Lego { 1.2 } else { 1.0 }
-    }
-}
-
 /// Parameters of voxelization and of the voxels' look and pace.
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]
 #[reflect(Resource)]
@@ -75,11 +33,12 @@ impl VoxelSettings {
     /// The smallest and largest grid sizes the panel offers (0.03: about 256 cells along a model's longest side).
     pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.03..=0.6;
 
-    /// The voxelizer options these settings ask for in `style`.
-    pub fn voxelize_options(&self, style: Style) -> VoxelizeOptions {
+    /// The voxelizer options these settings ask for, with cells `cell_height_ratio` times taller than wide (the
+    /// style's: [`Style::cell_height_ratio`](crate::style::Style::cell_height_ratio)).
+    pub fn voxelize_options(&self, cell_height_ratio: f32) -> VoxelizeOptions {
         VoxelizeOptions {
             grid: GridSize::Cell(self.grid_size.clamp(*Self::GRID_RANGE.start(), *Self::GRID_RANGE.end())),
-            cell_height_ratio: style.cell_height_ratio(),
+            cell_height_ratio,
             fill: self.fill,
             // Every solid voxel is kept (each marked visible or not): hollowing is a matter of display.
             hollow: false,
@@ -143,6 +102,4 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<SettingDrag>();
     app.init_resource::<VoxelSettings>();
     app.init_resource::<ColorSettings>();
-    // The default style; the command line's (`AppArgs::configure`) replaces it whether it comes before or after.
-    app.init_state::<Style>();
 }

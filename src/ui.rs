@@ -14,7 +14,8 @@ use crate::library::LibraryRequest;
 use crate::model::{ModelEntry, ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::palette::PaletteFiles;
 use crate::record::RecordStatus;
-use crate::settings::{ColorSettings, PanelOpen, RepelSettings, SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, PanelOpen, RepelSettings, SettingDrag, VoxelSettings};
+use crate::style::Style;
 use crate::transition::{Assignment, TransitionSettings};
 
 /// The colour limit slider's top (the .vox export holds 255 colours).

@@ -18,7 +18,7 @@ use bevy::render::render_resource::TextureFormat;
 use bevy::time::TimeUpdateStrategy;
 use voxel_art::instancing::VoxelPool;
 use voxel_art::model::{ModelLibrary, VoxelModelAsset};
-use voxel_art::settings::Style;
+use voxel_art::style::Style;
 use voxel_art::transition::ActiveTransition;
 use voxel_core::shapes::uv_sphere;
 use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};

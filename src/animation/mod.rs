@@ -16,7 +16,8 @@ use voxel_core::{VoxelModel, VoxelizeOptions};
 use crate::model::playback::{PoseRequest, Rig};
 use crate::model::{ModelLibrary, Playback, VoxelModelAsset};
 use crate::schedule::AnimationSystems;
-use crate::settings::{ColorSettings, Style, VoxelSettings};
+use crate::settings::{ColorSettings, VoxelSettings};
+use crate::style::Style;
 use crate::voxelize::VoxelizeGeneration;
 
 pub use follow::{CellSlots, POP_SECONDS};
@@ -134,7 +135,7 @@ fn start_jobs(
     let (Some(request), Some(_)) = (playback.pending, playback.rig.as_ref()) else { return };
     let Some(mut rig) = playback.rig.take() else { return };
     playback.pending = None;
-    let options = settings.voxelize_options(*style.get());
+    let options = settings.voxelize_options(style.get().cell_height_ratio());
     let task = AsyncComputeTaskPool::get().spawn(async move {
         let voxels = pose(&mut rig, request, &options).map_err(|e| e.to_string());
         (rig, voxels)

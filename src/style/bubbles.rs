@@ -4,14 +4,15 @@
 
 use bevy::prelude::*;
 
-use crate::input::CursorRay;
+use super::Style;
 use crate::instancing::{RepelOffset, Vacant, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
 use crate::rng::Rng;
 use crate::schedule::StyleSystems;
-use crate::settings::{RepelSettings, Style, VoxelSettings};
+use crate::settings::{RepelSettings, VoxelSettings};
+use crate::style::CursorRay;
 use crate::transition::{ActiveTransition, VoxelTween, back_out};
 
-use super::Settled;
+use super::AtHome;
 use super::repel::away_from_ray;
 
 /// Timings of a burst.
@@ -88,7 +89,7 @@ fn give_bubbles(mut commands: Commands, voxels: Query<(Entity, &VoxelSlot), With
     }
 }
 
-/// Leaving the style: the bubbles go, and every settled voxel of the model is back on its cell (no wobble, no
+/// Leaving the style: the bubbles go, and every voxel at home is back on its cell (no wobble, no
 /// swell), shown even if it had burst.
 fn take_bubbles(
     mut commands: Commands,
@@ -118,7 +119,7 @@ fn burst(
     ray: Res<CursorRay>,
     repel: Res<RepelSettings>,
     active: Res<ActiveTransition>,
-    mut bubbles: Query<(&VoxelSlot, &VoxelHome, &mut Bubble), Settled>,
+    mut bubbles: Query<(&VoxelSlot, &VoxelHome, &mut Bubble), AtHome>,
     mut frame: Local<u64>,
 ) {
     *frame += 1;

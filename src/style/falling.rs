@@ -6,16 +6,17 @@
 
 use bevy::prelude::*;
 
-use crate::input::ToggleFall;
+use crate::style::ToggleFall;
 use bevy::mesh::MeshTag;
 
+use super::Style;
 use crate::instancing::{
     MAX_DRAWN, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, floor_height, grow_pool, pack_color,
     voxel_target, voxel_transform,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::schedule::{AppSystems, StyleSystems};
-use crate::settings::{Style, VoxelSettings};
+use crate::settings::VoxelSettings;
 use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, TransitionStarted, VoxelTween};
 
 use super::pile::{Pile, PileParams};

@@ -1,4 +1,4 @@
-//! Placing settled voxels each frame: home cell + bubble wobble + repel spring, turned with the model.
+//! Placing the voxels at home each frame: home cell + bubble wobble + repel spring, turned with the model.
 //!
 //! The voxels are walked as whole component slices (Bevy's contiguous query iteration), split over the
 //! cores with `rayon::join`. With 100k voxels a per-entity `par_iter` closure cost more than the work it
@@ -10,12 +10,13 @@ use bevy::ecs::system::SystemChangeTick;
 use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 
-use crate::input::CursorRay;
+use super::Style;
 use crate::instancing::{RepelOffset, VoxelHome, VoxelPool, VoxelSlot, voxel_global};
-use crate::settings::{RepelSettings, Style, VoxelSettings};
+use crate::settings::{RepelSettings, VoxelSettings};
+use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
 
-use super::Settled;
+use super::AtHome;
 use super::bubbles::{Bubble, BubbleSettings};
 use super::repel::{RepelActive, repel_target};
 
@@ -180,9 +181,9 @@ impl Placement {
     }
 }
 
-/// Places settled voxels: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
+/// Places the voxels at home: home cell + bubble wobble + repel offset, turned with the model; bubble scale and
 /// visibility. The repel springs are stepped in the same pass, and nothing runs while nothing moves.
-pub(super) fn place_settled(
+pub(super) fn place_at_home(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
     repel: Res<RepelSettings>,
@@ -201,7 +202,7 @@ pub(super) fn place_settled(
             &mut GlobalTransform,
             &mut Visibility,
         ),
-        Settled,
+        AtHome,
     >,
     mut springs: ResMut<RepelActive>,
     ticks: SystemChangeTick,

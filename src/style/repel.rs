@@ -1,6 +1,6 @@
 //! Mouse repel: voxels near the cursor ray are pushed away from it and spring back (critically damped) when
 //! the cursor leaves. Works in every style; not while the pointer is over the panel (no cursor ray then).
-//! The math lives here; `place` steps every settled voxel's spring in the same pass that places it.
+//! The math lives here; `place` steps the spring of every voxel at home in the same pass that places it.
 
 use bevy::prelude::*;
 

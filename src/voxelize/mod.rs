@@ -21,7 +21,8 @@ use voxel_core::{AnimatedModel, Progress, Stage, TriangleSoup, VoxelModel};
 use crate::model::surface::surface_mesh;
 use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::schedule::VoxelizeSystems;
-use crate::settings::{ColorSettings, SettingDrag, Style, VoxelSettings};
+use crate::settings::{ColorSettings, SettingDrag, VoxelSettings};
+use crate::style::Style;
 use crate::threads::job_pool;
 
 /// Files with more triangles than this get a preview tile from their voxels instead of Bevy's glTF loader:
@@ -105,7 +106,7 @@ fn track_settings(
     mut generation: ResMut<VoxelizeGeneration>,
     mut last: Local<Option<voxel_core::VoxelizeOptions>>,
 ) {
-    let options = settings.voxelize_options(*style.get());
+    let options = settings.voxelize_options(style.get().cell_height_ratio());
     if last.is_some_and(|l| l != options) {
         generation.0 += 1;
     }
@@ -125,7 +126,7 @@ fn start_jobs(
     generation: Res<VoxelizeGeneration>,
     jobs: Query<(Entity, &VoxelizeJob)>,
 ) {
-    let options = settings.voxelize_options(*style.get());
+    let options = settings.voxelize_options(style.get().cell_height_ratio());
     let pool = AsyncComputeTaskPool::get();
     let current = library.current;
     let order = std::iter::once(current).chain((0..library.entries.len()).filter(|&i| i != current));

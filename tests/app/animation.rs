@@ -10,7 +10,8 @@ use voxel_art::config::AppArgs;
 use voxel_art::instancing::{Vacant, VoxelHome, VoxelPool};
 use voxel_art::library::LibraryRequest;
 use voxel_art::model::{ModelLibrary, Playback, VoxelModelAsset};
-use voxel_art::settings::{Style, VoxelSettings};
+use voxel_art::settings::VoxelSettings;
+use voxel_art::style::Style;
 use voxel_art::style::falling::FallingPile;
 use voxel_art::transition::{ActiveTransition, VoxelTween};
 

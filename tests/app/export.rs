@@ -10,7 +10,8 @@ use bevy::prelude::*;
 use voxel_art::config::AppArgs;
 use voxel_art::export::{ExportDir, ExportRequest, ExportStatus};
 use voxel_art::model::{ModelLibrary, VoxelModelAsset};
-use voxel_art::settings::{Style, VoxelSettings};
+use voxel_art::settings::VoxelSettings;
+use voxel_art::style::Style;
 use voxel_core::export::{ExportOptions, Saved};
 use voxel_core::{GridSize, ShellMode, VoxelModel, VoxelizeOptions};
 

@@ -67,8 +67,9 @@ pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
 /// stage afterwards, which for these two gives the same colours).
 pub fn app_options(app: &App) -> voxel_core::VoxelizeOptions {
     use voxel_core::palette::Palette;
-    let style = *app.world().resource::<State<voxel_art::settings::Style>>().get();
-    let options = app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style);
+    let style = *app.world().resource::<State<voxel_art::style::Style>>().get();
+    let options =
+        app.world().resource::<voxel_art::settings::VoxelSettings>().voxelize_options(style.cell_height_ratio());
     let stage = &app.world().resource::<voxel_art::settings::ColorSettings>().0;
     assert!(stage.max_colors.is_none() && !stage.dither, "no voxelizer option gives {stage:?}");
     let pastel = match stage.palette {

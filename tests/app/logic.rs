@@ -319,7 +319,7 @@ fn per_voxel_systems_get_every_core_and_small_machines_run_schedules_on_one_thre
 #[test]
 fn no_two_systems_that_share_data_run_in_an_undefined_order() {
     use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, Schedules};
-    use voxel_art::settings::Style;
+    use voxel_art::style::Style;
     let mut app = test_app(AppArgs { no_shipped: true, ..Default::default() });
     let strict = ScheduleBuildSettings { ambiguity_detection: LogLevel::Error, ..Default::default() };
     // The app's schedules (Bevy's own, such as StateTransition, order their systems by other means).

@@ -4,10 +4,11 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
-use voxel_art::input::CursorRay;
 use voxel_art::instancing::{VoxelCloud, VoxelHome, VoxelSlot};
 use voxel_art::library::LibraryRequest;
-use voxel_art::settings::{RepelSettings, Style, VoxelSettings};
+use voxel_art::settings::{RepelSettings, VoxelSettings};
+use voxel_art::style::CursorRay;
+use voxel_art::style::Style;
 use voxel_art::style::bubbles::{Bubble, BubbleSettings, BubbleState};
 use voxel_art::style::falling::FallingPile;
 
