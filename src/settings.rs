@@ -34,7 +34,7 @@ impl VoxelSettings {
     pub const GRID_RANGE: std::ops::RangeInclusive<f32> = 0.03..=0.6;
 
     /// The voxelizer options these settings ask for, with cells `cell_height_ratio` times taller than wide (the
-    /// style's: [`Style::cell_height_ratio`](crate::style::Style::cell_height_ratio)).
+    /// style's `Style::cell_height_ratio`: settings know nothing of styles, which read the settings).
     pub fn voxelize_options(&self, cell_height_ratio: f32) -> VoxelizeOptions {
         VoxelizeOptions {
             grid: GridSize::Cell(self.grid_size.clamp(*Self::GRID_RANGE.start(), *Self::GRID_RANGE.end())),
