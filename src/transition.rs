@@ -8,19 +8,21 @@
 //! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores). So
 //! each flying voxel carries a [`VoxelTween`], stepped by one `par_iter_mut` system right after the model-level
 //! tweens, which composes the spin into every voxel's transform: voxels and the cloud's frame always agree.
+//! Voxels are pool slots, not entities: the tweens are one array by slot ([`VoxelTweens`]), stepped a chunk of
+//! slots to a task, each writing its chunk of looks.
 
 use std::f32::consts::PI;
 use std::time::Duration;
 
-use bevy::ecs::system::ParallelCommands;
-use bevy::math::Mat3A;
-use bevy::mesh::MeshTag;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
+use rayon::prelude::*;
 
 use crate::instancing::{
-    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, drawn_count,
-    pack_color, placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
+    GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Turn, VOXELS_PER_CHUNK, VoxelCloud, VoxelHome, VoxelPool,
+    VoxelTarget, apply_targets, drawn_count, pack_color, placeholder_targets, targets_for, unpack_color,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
@@ -111,8 +113,7 @@ pub fn back_out(t: f32, s: f32) -> f32 {
 }
 
 /// One voxel's flight: position (back-out), colour (after a delay), visibility (the count tween).
-#[derive(Component, Clone, Debug, PartialEq)]
-
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct VoxelTween {
     /// Start and end position (cloud space).
     pub from: Vec3,
@@ -159,6 +160,38 @@ pub enum TweenShow {
     UntilEnd,
 }
 
+impl Default for TweenShow {
+    fn default() -> Self {
+        TweenShow::Count { end: 0.0 }
+    }
+}
+
+/// The voxels' flights by pool slot (a slot's is live while the slot is `flying`).
+#[derive(Resource, Debug, Default)]
+pub struct VoxelTweens {
+    /// The flights, by slot.
+    tweens: Vec<VoxelTween>,
+    /// At least as many as fly now (none: the step has nothing to do).
+    live: usize,
+}
+
+impl VoxelTweens {
+    /// Starts `tween` on slot `slot` of `pool` (the array grows with the pool).
+    pub fn fly(&mut self, pool: &mut VoxelPool, slot: usize, tween: VoxelTween) {
+        if self.tweens.len() < pool.slots.len() {
+            self.tweens.resize(pool.slots.len(), VoxelTween::default());
+        }
+        self.tweens[slot] = tween;
+        pool.slots[slot].flying = true;
+        self.live += 1;
+    }
+
+    /// The live flights: (slot, tween).
+    pub fn flying<'a>(&'a self, pool: &'a VoxelPool) -> impl Iterator<Item = (usize, &'a VoxelTween)> + 'a {
+        pool.slots.iter().zip(&self.tweens).enumerate().filter(|(_, (s, _))| s.flying).map(|(i, (_, t))| (i, t))
+    }
+}
+
 impl VoxelTween {
     /// When every part of the tween is over.
     pub fn end(&self) -> f32 {
@@ -167,7 +200,7 @@ impl VoxelTween {
     }
 
     /// Whether it shows now, given the visible-count tween's `shown` slots.
-    fn shows(&self, slot: u32, shown: f32) -> bool {
+    fn shows(&self, slot: usize, shown: f32) -> bool {
         match self.show {
             TweenShow::Count { .. } => (slot as f32) < shown,
             TweenShow::Shown => true,
@@ -394,6 +427,8 @@ pub fn plan(
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
+    mut looks: ResMut<GpuVoxels>,
+    mut tweens: ResMut<VoxelTweens>,
     mut active: ResMut<ActiveTransition>,
     mut started: MessageWriter<TransitionStarted>,
     mut reassemble: MessageReader<Reassemble>,
@@ -402,7 +437,6 @@ fn start(
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     drag: Res<SettingDrag>,
-    voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
     model_tweens: Query<Entity, With<ModelTween>>,
     mut last_look: Local<Option<(f32, bool)>>,
 ) {
@@ -411,36 +445,37 @@ fn start(
     // A new box size or the hollow switch lays the model out again.
     let look = (settings.box_size, settings.hollow);
     let relook = last_look.is_some_and(|l| l != look);
-    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < drawn_count(model, settings.hollow) {
+    if (pool.shown == Some(id) && !relook && !restart) || pool.slots.len() < drawn_count(model, settings.hollow) {
         return;
     }
     *last_look = Some(look);
     let transition = if drag.0 { transition.instant() } else { transition.clone() };
     let new = layout(model, &settings, &transition);
-    // Voxel transforms are world space; tweens run in the cloud's (model) space.
-    let unturn = active.turn().inverse();
-    let mut slots: Vec<(Entity, u32, SlotState)> = voxels
+    // Looks are world space; tweens run in the cloud's (model) space.
+    let turn = Turn::new(active.turn());
+    let now: Vec<SlotState> = looks.voxels[..pool.slots.len()]
         .iter()
-        .map(|(e, s, t, tag, v)| {
-            (e, s.0, (unturn * t.translation, t.scale, unpack_color(tag.0), *v != Visibility::Hidden))
-        })
+        .map(|v| (turn.unturn(v.position()), v.scale(), unpack_color(v.color), v.shows()))
         .collect();
-    slots.sort_unstable_by_key(|s| s.1);
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
     // joining one not yet shown, is picked up where it is).
-    let old_count = slots.iter().filter(|s| s.2.3).map(|s| s.1 as usize + 1).max().unwrap_or(0);
-    let old: Vec<SlotState> = slots.iter().take(old_count).map(|s| s.2).collect();
+    let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
+    let old = &now[..old_count];
     let mut rng = Rng::new(active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17));
     let mut end = 0.0f32;
-    for (entity, slot, now) in &slots {
-        match plan(*slot as usize, *now, old_count, &old, &new, &transition, &mut rng) {
+    for (slot, state) in now.iter().enumerate() {
+        // The flight starts where the voxel is now, repel displacement included: that is spent.
+        pool.slots[slot].repel = RepelOffset::default();
+        match plan(slot, *state, old_count, old, &new, &transition, &mut rng) {
             Some((tween, home)) => {
                 end = end.max(tween.end());
-                // The flight starts where the voxel is now, repel displacement included: that is spent.
-                commands.entity(*entity).insert((tween, home, RepelOffset::default()));
+                pool.slots[slot].home = home;
+                tweens.fly(&mut pool, slot, tween);
             }
             None => {
-                commands.entity(*entity).remove::<VoxelTween>().insert((Visibility::Hidden, RepelOffset::default()));
+                pool.slots[slot].flying = false;
+                let hidden = looks.voxels[slot].hidden();
+                looks.set(slot, hidden);
             }
         }
     }
@@ -461,67 +496,30 @@ fn start(
     started.write(TransitionStarted { model: id });
 }
 
-/// The voxels in flight, with everything the step writes.
-type TweeningVoxels<'w, 's> = Query<
-    'w,
-    's,
-    (
-        Entity,
-        &'static VoxelSlot,
-        &'static mut VoxelTween,
-        &'static mut Transform,
-        &'static mut GlobalTransform,
-        &'static mut MeshTag,
-        &'static mut Visibility,
-    ),
-    Without<VoxelCloud>,
->;
-
-/// Steps every voxel tween in parallel (after the model-level tweens: the spin and the visible count are this
-/// frame's); finished ones snap to their end and are removed.
+/// Steps every voxel tween, a chunk of slots to a task (after the model-level tweens: the spin and the visible
+/// count are this frame's); finished ones snap to their end and land.
 fn step(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
     mut active: ResMut<ActiveTransition>,
     mut finished: MessageWriter<TransitionFinished>,
-    mut tweens: TweeningVoxels,
+    mut pool: ResMut<VoxelPool>,
+    mut tweens: ResMut<VoxelTweens>,
+    mut looks: ResMut<GpuVoxels>,
     mut cloud: Query<&mut Transform, With<VoxelCloud>>,
-    par_commands: ParallelCommands,
 ) {
     let dt = time.delta_secs() * settings.speed;
     if active.running.is_some() {
         active.elapsed += dt;
     }
     let rotation = active.turn();
-    let turn = Mat3A::from_quat(rotation);
-    let shown = active.shown;
+    let turn = Turn::new(rotation);
     if let Ok(mut cloud) = cloud.single_mut() {
         cloud.rotation = rotation;
     }
-    tweens.par_iter_mut().for_each(|(entity, slot, mut tween, mut transform, mut global, mut tag, mut visibility)| {
-        tween.elapsed += dt;
-        let (position, scale) = tween.transform();
-        // Voxels have no parent, so their global transform is their transform: write both here and keep the
-        // Transform write out of change detection, which spares Bevy's propagation pass over 100k moving
-        // voxels (4 ms a frame on two cores). The renderer picks up the changed GlobalTransform.
-        let local = voxel_transform(rotation, position, scale);
-        *transform.bypass_change_detection() = local;
-        *global = voxel_global(turn, scale, local.translation);
-        // The colour only moves inside its short window (and lands exactly at its end).
-        if tween.elapsed >= tween.color_delay {
-            let color = pack_color(tween.color());
-            if tag.0 != color {
-                tag.0 = color;
-            }
-        }
-        let visible = tween.shows(slot.0, shown);
-        visibility.set_if_neq(if visible { Visibility::Inherited } else { Visibility::Hidden });
-        if tween.elapsed >= tween.end() {
-            par_commands.command_scope(|mut commands| {
-                commands.entity(entity).remove::<VoxelTween>();
-            });
-        }
-    });
+    if tweens.live > 0 {
+        tweens.live = step_flights(&mut pool, &mut tweens.tweens, &mut looks, dt, turn, active.shown);
+    }
     if let Some((model, end)) = active.running
         && active.elapsed >= end
     {
@@ -530,38 +528,63 @@ fn step(
     }
 }
 
+/// Steps the flights of `pool`'s flying slots by `dt`, writing their looks (`shown`: the visible-count tween's
+/// slots); returns how many still fly.
+fn step_flights(
+    pool: &mut VoxelPool,
+    tweens: &mut [VoxelTween],
+    looks: &mut GpuVoxels,
+    dt: f32,
+    turn: Turn,
+    shown: f32,
+) -> usize {
+    let flying = AtomicUsize::new(0);
+    let slots = pool.slots.par_chunks_mut(VOXELS_PER_CHUNK);
+    let flights = tweens.par_chunks_mut(VOXELS_PER_CHUNK);
+    slots.zip(flights).zip(looks.pieces()).for_each(|((slots, flights), mut piece)| {
+        let mut still = 0;
+        for (i, (slot, tween)) in slots.iter_mut().zip(flights).enumerate().filter(|(_, (s, _))| s.flying) {
+            tween.elapsed += dt;
+            let (position, scale) = tween.transform();
+            // The colour only moves inside its short window (and lands exactly at its end).
+            let color =
+                if tween.elapsed >= tween.color_delay { pack_color(tween.color()) } else { piece.voxels[i].color };
+            let look = turn.place(position, scale, color);
+            piece.set(i, if tween.shows(piece.start + i, shown) { look } else { look.hidden() });
+            slot.flying = tween.elapsed < tween.end();
+            still += usize::from(slot.flying);
+        }
+        flying.fetch_add(still, Ordering::Relaxed);
+    });
+    flying.into_inner()
+}
+
 /// Placeholder boxes bob gently while nothing is voxelized yet.
-fn float_placeholder(
-    time: Res<Time>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
-) {
+fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut looks: ResMut<GpuVoxels>) {
     if pool.shown.is_some() {
         return;
     }
     let t = time.elapsed_secs();
-    for (slot, mut transform) in &mut voxels {
-        let phase = slot.0 as f32 * 0.7;
-        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+    for slot in 0..pool.slots.len().min(PLACEHOLDER_COUNT) {
+        let mut look = looks.voxels[slot];
+        let phase = slot as f32 * 0.7;
+        look.translation[1] += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+        looks.set(slot, look);
     }
 }
 
-/// The placeholder floats until the first model arrives; it is laid out once the pool has grown.
-fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Local<bool>) {
-    if *done || pool.shown.is_some() || voxels.iter().len() < PLACEHOLDER_COUNT {
+/// The placeholder floats until the first model arrives; it is laid out once.
+fn placeholder(mut pool: ResMut<VoxelPool>, mut looks: ResMut<GpuVoxels>, mut done: Local<bool>) {
+    if *done || pool.shown.is_some() || pool.slots.len() < PLACEHOLDER_COUNT {
         return;
     }
-    crate::instancing::apply_targets(
-        &mut pool,
-        &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed),
-        Quat::IDENTITY,
-        &mut voxels,
-    );
+    let targets = placeholder_targets(PLACEHOLDER_COUNT, 0x5eed);
+    apply_targets(&mut pool, &mut looks, &targets, Turn::new(Quat::IDENTITY));
     *done = true;
 }
 
 /// Gives the voxels of the model on screen its new colours after a recolour ([`Recolored`]): slot i keeps cell i
-/// of the layout (as the morph laid them) and takes that cell's colour; only tags that change are written, so
+/// of the layout (as the morph laid them) and takes that cell's colour; only looks that change are written, so
 /// only their chunks are uploaded. During a morph, once it is over (its colours were planned from the old ones).
 fn show_recolored(
     mut recolored: MessageReader<Recolored>,
@@ -569,7 +592,7 @@ fn show_recolored(
     models: Res<Assets<VoxelModelAsset>>,
     (settings, transition, active): (Res<VoxelSettings>, Res<TransitionSettings>, Res<ActiveTransition>),
     pool: Res<VoxelPool>,
-    mut tags: Query<&mut MeshTag>,
+    mut looks: ResMut<GpuVoxels>,
 ) {
     if let Some(r) = recolored.read().filter(|r| pool.shown == Some(r.model)).last() {
         *pending = Some(r.model);
@@ -579,16 +602,16 @@ fn show_recolored(
     }
     let Some(id) = pending.take().filter(|id| pool.shown == Some(*id)) else { return };
     let Some(model) = models.get(id) else { return };
-    for (target, &entity) in layout(model, &settings, &transition).iter().zip(&pool.slots) {
-        if let Ok(mut tag) = tags.get_mut(entity) {
-            tag.set_if_neq(MeshTag(pack_color(target.color)));
-        }
+    for (slot, target) in layout(model, &settings, &transition).iter().enumerate().take(pool.slots.len()) {
+        let look = GpuVoxel { color: pack_color(target.color), ..looks.voxels[slot] };
+        looks.set(slot, look);
     }
 }
 
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
+    app.init_resource::<VoxelTweens>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();

@@ -3,9 +3,9 @@
 //! mesh entities at a million voxels, batched into one instanced draw per view (the main pass and the light's
 //! shadow pass), instead of a mesh entity per voxel.
 //!
-//! Each frame, after transform propagation, the voxels whose transform, colour or visibility changed are
-//! gathered (in parallel) into a CPU mirror of the buffer; extraction writes only the chunks that changed
-//! with `RenderQueue::write_buffer`. The plugin owns the buffer: a `ShaderBuffer` asset created at its size
+//! The systems that move voxels write their looks into [`GpuVoxels`], the CPU mirror of the buffer, marking the
+//! chunks they change; after `Update` those chunks become the frame's upload ranges, and extraction writes only
+//! them with `RenderQueue::write_buffer`. The plugin owns the buffer: a `ShaderBuffer` asset created at its size
 //! without data (so Bevy never uploads it whole), replaced by a bigger one when the pool outgrows it.
 
 use bevy::camera::visibility::NoFrustumCulling;
@@ -15,11 +15,11 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::RenderQueue;
 use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp};
-use bevy::utils::Parallel;
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
 use super::material::ChunkLayout;
-use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, VoxelSlot, mesh::chunk_mesh};
+use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, mesh::chunk_mesh};
 use crate::model::VoxelModelAsset;
 use crate::schedule::InstancingSystems;
 use crate::settings::VoxelSettings;
@@ -48,53 +48,70 @@ pub struct GpuVoxel {
 }
 
 impl GpuVoxel {
-    /// A voxel placed by `global` (a turn about y and a scale), coloured `color`; a hidden one has no size.
-    pub fn new(global: &GlobalTransform, color: u32, shown: bool) -> Self {
-        let affine = global.affine();
-        let m = affine.matrix3;
-        let translation = affine.translation.into();
-        if !shown {
-            return Self { translation, color, ..Self::default() };
-        }
-        Self { translation, color, x_axis: [m.x_axis.x, m.x_axis.z], scale_y: m.y_axis.y, scale_z: m.z_axis.length() }
+    /// The same voxel hidden (no size: it draws nothing), keeping its place and colour.
+    pub fn hidden(&self) -> Self {
+        Self { translation: self.translation, color: self.color, ..Self::default() }
     }
 
     /// Whether it draws anything.
     pub fn shows(&self) -> bool {
         self.scale_y != 0.0
     }
+
+    /// Its centre.
+    pub fn position(&self) -> Vec3 {
+        Vec3::from(self.translation)
+    }
+
+    /// Its box size (width, height, depth; zero when hidden).
+    pub fn scale(&self) -> Vec3 {
+        Vec3::new(Vec2::from(self.x_axis).length(), self.scale_y, self.scale_z)
+    }
 }
 
-/// The CPU mirror of the voxel buffer and what changed in it this frame.
+/// The voxels' looks by pool slot (the CPU mirror of the voxel buffer, whole chunks) and which chunks changed.
 #[derive(Resource, Debug, Default)]
 pub struct GpuVoxels {
     /// The voxels by pool slot (as long as the buffer holds).
     pub voxels: Vec<GpuVoxel>,
-    /// Voxels that show, per chunk (a chunk with none is not drawn).
+    /// A flag per chunk: changed since the last gather.
+    dirty: Vec<bool>,
+    /// Voxels that show, per chunk (a chunk with none is not drawn), as of the last gather.
     shown: Vec<u32>,
-    /// Chunks changed this frame (each once), and a flag per chunk.
-    dirty: Vec<u32>,
-    dirty_flag: Vec<bool>,
+    /// Ranges of voxels (start, end) the last gather found changed: this frame's uploads.
+    ranges: Vec<(usize, usize)>,
     /// The GPU buffer (`None` until the pool has a voxel).
     pub buffer: Option<Handle<ShaderBuffer>>,
+    /// Voxels the GPU buffer holds.
+    buffer_len: usize,
     /// The buffer is new this frame: all of it is uploaded.
     pub whole: bool,
 }
 
-impl GpuVoxels {
-    /// Ranges of voxels (start, end) to upload this frame, adjacent chunks merged.
-    pub fn dirty_ranges(&self) -> Vec<(usize, usize)> {
-        let mut chunks = self.dirty.clone();
-        chunks.sort_unstable();
-        let mut ranges: Vec<(usize, usize)> = Vec::new();
-        for c in chunks {
-            let (start, end) = (c as usize * VOXELS_PER_CHUNK, (c as usize + 1) * VOXELS_PER_CHUNK);
-            match ranges.last_mut() {
-                Some(last) if last.1 == start => last.1 = end,
-                _ => ranges.push((start, end)),
-            }
+/// One chunk of looks handed to one task: its voxels and its changed flag.
+pub struct Piece<'a> {
+    /// The slot of its first voxel.
+    pub start: usize,
+    /// Its voxels.
+    pub voxels: &'a mut [GpuVoxel],
+    dirty: &'a mut bool,
+}
+
+impl Piece<'_> {
+    /// Sets voxel `i` of the piece, marking the chunk changed when it is.
+    #[inline]
+    pub fn set(&mut self, i: usize, voxel: GpuVoxel) {
+        if self.voxels[i] != voxel {
+            self.voxels[i] = voxel;
+            *self.dirty = true;
         }
-        ranges
+    }
+}
+
+impl GpuVoxels {
+    /// Ranges of voxels (start, end) to upload this frame (changed chunks, adjacent ones merged).
+    pub fn dirty_ranges(&self) -> &[(usize, usize)] {
+        &self.ranges
     }
 
     /// Whether chunk `c` has a voxel to draw.
@@ -102,42 +119,57 @@ impl GpuVoxels {
         self.shown.get(c).is_some_and(|n| *n > 0)
     }
 
-    /// Sets slot `slot` to `voxel`, keeping the chunk's count and dirty flag (a slot past the buffer's end, which
-    /// the pool's cap keeps from happening, is not drawn).
-    fn set(&mut self, slot: usize, voxel: GpuVoxel) {
-        let Some(old) = self.voxels.get_mut(slot).map(|v| std::mem::replace(v, voxel)) else { return };
-        if old == voxel {
+    /// Sets slot `slot` to `voxel`, marking its chunk changed when it is (a slot past the buffer's end, which the
+    /// pool's cap keeps from happening, is not drawn).
+    pub fn set(&mut self, slot: usize, voxel: GpuVoxel) {
+        let Some(old) = self.voxels.get_mut(slot) else { return };
+        if *old != voxel {
+            *old = voxel;
+            self.dirty[slot / VOXELS_PER_CHUNK] = true;
+        }
+    }
+
+    /// The chunks as pieces, for tasks that write looks in parallel (zip them with the pool's slots chunked by
+    /// [`VOXELS_PER_CHUNK`]).
+    pub fn pieces(&mut self) -> impl IndexedParallelIterator<Item = Piece<'_>> {
+        self.voxels
+            .par_chunks_mut(VOXELS_PER_CHUNK)
+            .zip(self.dirty.par_iter_mut())
+            .enumerate()
+            .map(|(c, (voxels, dirty))| Piece { start: c * VOXELS_PER_CHUNK, voxels, dirty })
+    }
+
+    /// Turns the changed chunks into this frame's upload ranges and recounts what they show.
+    fn collect_changes(&mut self) {
+        self.ranges.clear();
+        for (c, dirty) in self.dirty.iter_mut().enumerate() {
+            if !std::mem::take(dirty) {
+                continue;
+            }
+            let (start, end) = (c * VOXELS_PER_CHUNK, (c + 1) * VOXELS_PER_CHUNK);
+            self.shown[c] = self.voxels[start..end].iter().filter(|v| v.shows()).count() as u32;
+            match self.ranges.last_mut() {
+                Some(last) if last.1 == start => last.1 = end,
+                _ => self.ranges.push((start, end)),
+            }
+        }
+    }
+
+    /// Makes room for `slots` voxels: whole chunks, doubling (the buffer is replaced at the next gather).
+    pub fn reserve(&mut self, slots: usize) {
+        if slots <= self.voxels.len() {
             return;
-        }
-        let c = slot / VOXELS_PER_CHUNK;
-        self.shown[c] = self.shown[c] + u32::from(voxel.shows()) - u32::from(old.shows());
-        if !self.dirty_flag[c] {
-            self.dirty_flag[c] = true;
-            self.dirty.push(c as u32);
-        }
-    }
-
-    /// Forgets last frame's changes.
-    fn clear_changes(&mut self) {
-        for c in self.dirty.drain(..) {
-            self.dirty_flag[c as usize] = false;
-        }
-        self.whole = false;
-    }
-
-    /// Makes room for `slots` voxels: a bigger buffer (whole chunks, doubling) when needed; returns whether the
-    /// buffer was replaced.
-    fn reserve(&mut self, slots: usize) -> bool {
-        if slots <= self.voxels.len() && self.buffer.is_some() {
-            return false;
         }
         let chunks = slots.div_ceil(VOXELS_PER_CHUNK).max(1).next_power_of_two();
         let len = (chunks * VOXELS_PER_CHUNK).min(MAX_GPU_VOXELS.next_multiple_of(VOXELS_PER_CHUNK));
         self.voxels.resize(len, GpuVoxel::default());
         self.shown.resize(len / VOXELS_PER_CHUNK, 0);
-        self.dirty_flag.resize(len / VOXELS_PER_CHUNK, false);
-        self.whole = true;
-        true
+        self.dirty.resize(len / VOXELS_PER_CHUNK, false);
+    }
+
+    /// Whether the GPU buffer is missing or smaller than the mirror.
+    fn outgrown(&self) -> bool {
+        self.buffer.is_none() || self.buffer_len < self.voxels.len()
     }
 }
 
@@ -145,27 +177,20 @@ impl GpuVoxels {
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VoxelChunk(pub u32);
 
-/// The voxels whose look changed since the last gather (or which are new).
-type ChangedVoxels<'w, 's> = Query<
-    'w,
-    's,
-    (&'static VoxelSlot, &'static GlobalTransform, &'static MeshTag, &'static Visibility),
-    (Without<VoxelCloud>, Or<(Changed<GlobalTransform>, Changed<MeshTag>, Changed<Visibility>)>),
->;
+/// Collects this frame's changed chunks: the upload ranges.
+pub(super) fn gather(mut gpu: ResMut<GpuVoxels>) {
+    gpu.collect_changes();
+}
 
-/// Copies the voxels that changed into the mirror (found in parallel, written in one pass), growing the
-/// buffer with the pool.
-fn gather(
+/// Replaces the GPU buffer when the pool outgrew it (the new one is uploaded whole).
+fn fit_buffer(
     mut gpu: ResMut<GpuVoxels>,
-    pool: Res<VoxelPool>,
     assets: Res<VoxelAssets>,
-    voxels: ChangedVoxels,
-    mut found: Local<Parallel<Vec<(u32, GpuVoxel)>>>,
     mut buffers: ResMut<Assets<ShaderBuffer>>,
     mut materials: ResMut<Assets<VoxelMaterial>>,
 ) {
-    gpu.clear_changes();
-    if gpu.reserve(pool.slots.len()) {
+    gpu.whole = false;
+    if !gpu.voxels.is_empty() && gpu.outgrown() {
         let size = gpu.voxels.len() * size_of::<GpuVoxel>();
         let buffer = buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
         if let Some(old) = gpu.buffer.replace(buffer.clone()) {
@@ -174,16 +199,8 @@ fn gather(
         if let Some(mut material) = materials.get_mut(&assets.material) {
             material.extension.voxels = buffer;
         }
-    }
-    let lists: &Parallel<_> = &found;
-    voxels.par_iter().for_each(|(slot, global, tag, visibility)| {
-        let voxel = GpuVoxel::new(global, tag.0, *visibility != Visibility::Hidden);
-        lists.borrow_local_mut().push((slot.0, voxel));
-    });
-    for list in found.iter_mut() {
-        for (slot, voxel) in list.drain(..) {
-            gpu.set(slot as usize, voxel);
-        }
+        gpu.buffer_len = gpu.voxels.len();
+        gpu.whole = true;
     }
 }
 
@@ -308,7 +325,7 @@ fn upload(
         pending.0 = Some((handle.id(), bytemuck::cast_slice(&gpu.voxels).to_vec()));
         return;
     };
-    for (start, end) in gpu.dirty_ranges() {
+    for &(start, end) in gpu.dirty_ranges() {
         let end = end.min(gpu.voxels.len());
         let offset = (start * size_of::<GpuVoxel>()) as u64;
         queue.write_buffer(&target.buffer, offset, bytemuck::cast_slice(&gpu.voxels[start..end]));
@@ -340,13 +357,12 @@ pub fn triangles_per_frame(world: &mut World) -> u64 {
 
 /// The render side of the instancing plugin.
 pub(super) fn plugin(app: &mut App) {
-    app.init_resource::<GpuVoxels>();
     app.init_resource::<Detail>();
     app.add_systems(
         PostUpdate,
         (
             rebuild_chunk_meshes.in_set(InstancingSystems::Meshes),
-            gather.in_set(InstancingSystems::Gather),
+            fit_buffer.in_set(InstancingSystems::Buffer),
             choose_detail.in_set(InstancingSystems::Detail),
             fit_chunks.in_set(InstancingSystems::Chunks),
         ),
@@ -360,43 +376,47 @@ pub(super) fn plugin(app: &mut App) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::instancing::voxel_transform;
+    use crate::instancing::Turn;
 
     #[test]
     fn a_voxel_keeps_its_place_turn_size_and_colour_in_32_bytes() {
         assert_eq!(size_of::<GpuVoxel>(), 32);
-        let turn = Quat::from_rotation_y(0.7);
-        let global = GlobalTransform::from(voxel_transform(turn, Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.24, 0.2)));
-        let v = GpuVoxel::new(&global, 0xff11_2233, true);
+        let turn = Turn::new(Quat::from_rotation_y(0.7));
+        let v = turn.place(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.24, 0.2), 0xff11_2233);
         assert_eq!(v.color, 0xff11_2233);
-        assert!(Vec3::from(v.translation).distance(turn * Vec3::new(1.0, 2.0, 3.0)) < 1e-6);
+        assert!(v.position().distance(turn.rotation * Vec3::new(1.0, 2.0, 3.0)) < 1e-6);
+        assert!(turn.unturn(v.position()).distance(Vec3::new(1.0, 2.0, 3.0)) < 1e-5);
         // The x axis is the width turned: (cos, −sin) × 0.2; the height and depth as given.
         assert!((v.x_axis[0] - 0.2 * 0.7f32.cos()).abs() < 1e-6 && (v.x_axis[1] + 0.2 * 0.7f32.sin()).abs() < 1e-6);
-        assert!((v.scale_y - 0.24).abs() < 1e-6 && (v.scale_z - 0.2).abs() < 1e-6);
+        assert!(v.scale().distance(Vec3::new(0.2, 0.24, 0.2)) < 1e-6);
         assert!(v.shows());
-        let hidden = GpuVoxel::new(&global, 0xff11_2233, false);
+        let hidden = v.hidden();
         assert!(!hidden.shows() && hidden.x_axis == [0.0; 2] && hidden.scale_z == 0.0);
+        assert_eq!((hidden.translation, hidden.color), (v.translation, v.color));
     }
 
     #[test]
     fn only_changed_chunks_are_uploaded_and_empty_chunks_are_not_drawn() {
         let mut gpu = GpuVoxels::default();
-        assert!(gpu.reserve(3 * VOXELS_PER_CHUNK + 1));
+        gpu.reserve(3 * VOXELS_PER_CHUNK + 1);
         assert_eq!(gpu.voxels.len(), 4 * VOXELS_PER_CHUNK, "whole chunks, doubling");
         let shown = GpuVoxel { scale_y: 1.0, ..GpuVoxel::default() };
-        gpu.clear_changes();
         gpu.set(5, shown);
         gpu.set(VOXELS_PER_CHUNK + 7, shown);
-        gpu.set(3 * VOXELS_PER_CHUNK, shown);
+        // A task writing a piece marks its chunk too.
+        gpu.pieces().filter(|p| p.start == 3 * VOXELS_PER_CHUNK).for_each(|mut p| p.set(0, shown));
+        gpu.collect_changes();
         // Chunks 0 and 1 merge into one range; chunk 3 is another.
-        assert_eq!(gpu.dirty_ranges(), vec![(0, 2 * VOXELS_PER_CHUNK), (3 * VOXELS_PER_CHUNK, 4 * VOXELS_PER_CHUNK)]);
+        assert_eq!(gpu.dirty_ranges(), &[(0, 2 * VOXELS_PER_CHUNK), (3 * VOXELS_PER_CHUNK, 4 * VOXELS_PER_CHUNK)]);
         assert!(gpu.chunk_shows(0) && gpu.chunk_shows(1) && !gpu.chunk_shows(2) && gpu.chunk_shows(3));
-        gpu.clear_changes();
         // The same value again changes nothing; hiding the last voxel of a chunk stops drawing it.
         gpu.set(5, shown);
+        gpu.pieces().for_each(|mut p| p.set(0, p.voxels[0]));
+        gpu.collect_changes();
         assert!(gpu.dirty_ranges().is_empty());
         gpu.set(VOXELS_PER_CHUNK + 7, GpuVoxel::default());
-        assert_eq!(gpu.dirty_ranges(), vec![(VOXELS_PER_CHUNK, 2 * VOXELS_PER_CHUNK)]);
+        gpu.collect_changes();
+        assert_eq!(gpu.dirty_ranges(), &[(VOXELS_PER_CHUNK, 2 * VOXELS_PER_CHUNK)]);
         assert!(!gpu.chunk_shows(1));
         // A slot past the buffer is ignored.
         gpu.set(gpu.voxels.len(), shown);
