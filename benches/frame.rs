@@ -71,9 +71,9 @@ fn recolor_everything(time: Res<Time>, pool: Res<VoxelPool>, mut looks: ResMut<G
     let shift = (time.elapsed_secs() * 60.0) as u32;
     let visible = pool.visible;
     looks.pieces().for_each(|mut piece| {
-        for i in 0..piece.voxels.len().min(visible.saturating_sub(piece.start)) {
+        for i in 0..piece.items.len().min(visible.saturating_sub(piece.start)) {
             let color = ((piece.start + i) as u32).wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000;
-            piece.set(i, voxel_art::instancing::GpuVoxel { color, ..piece.voxels[i] });
+            piece.set(i, voxel_art::instancing::GpuVoxel { color, ..piece.items[i] });
         }
     });
 }

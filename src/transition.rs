@@ -5,24 +5,21 @@
 //! The two model-level animations, the spin and the visible count, are bevy_tweening `TweenAnim`s on
 //! [`ActiveTransition`]. The per-voxel flights are not: bevy_tweening 0.16 steps every `TweenAnim` in one
 //! exclusive, single-threaded system through boxed closures, measured at 14.6 ms a frame for 100k per-voxel
-//! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores). So
-//! each flying voxel carries a [`VoxelTween`], stepped by one `par_iter_mut` system right after the model-level
-//! tweens, which composes the spin into every voxel's transform: voxels and the cloud's frame always agree.
-//! Voxels are pool slots, not entities: the tweens are one array by slot ([`VoxelTweens`]), stepped a chunk of
-//! slots to a task, each writing its chunk of looks.
+//! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores).
+//! Voxels are pool slots, not entities: a morph writes one [`VoxelTween`] per slot ([`VoxelTweens`]) and the
+//! look where it lands, once; the GPU draws the flight from the tween at the frame's clock (the spin angle and
+//! the visible count in it), so the CPU's part of a frame mid-morph is the clock and landing the voxels whose
+//! flights are over.
 
 use std::f32::consts::PI;
 use std::time::Duration;
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
-use rayon::prelude::*;
 
 use crate::instancing::{
-    GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Turn, VOXELS_PER_CHUNK, VoxelCloud, VoxelHome, VoxelPool,
-    VoxelTarget, apply_targets, drawn_count, pack_color, placeholder_targets, targets_for, unpack_color,
+    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Turn, TweenShow, VoxelCloud, VoxelHome, VoxelPool,
+    VoxelTarget, VoxelTween, VoxelTweens, apply_targets, drawn_count, pack_color, placeholder_targets, targets_for,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
@@ -104,125 +101,6 @@ pub enum Assignment {
     Height,
     /// The voxelizer's own cell order (x-major): visibly noisier paths.
     Grid,
-}
-
-/// Back-out easing with overshoot `s` (the article's `back.out(3)`; Bevy's `BackOut` uses 1.70158).
-pub fn back_out(t: f32, s: f32) -> f32 {
-    let u = t.clamp(0.0, 1.0) - 1.0;
-    1.0 + (s + 1.0) * u * u * u + s * u * u
-}
-
-/// One voxel's flight: position (back-out), colour (after a delay), visibility (the count tween).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct VoxelTween {
-    /// Start and end position (cloud space).
-    pub from: Vec3,
-    /// End position.
-    pub to: Vec3,
-    /// Start and end box scale.
-    pub from_scale: Vec3,
-    /// End scale.
-    pub to_scale: Vec3,
-    /// Seconds before it moves.
-    pub delay: f32,
-    /// Seconds the move takes.
-    pub duration: f32,
-    /// Start colour.
-    pub color_from: [u8; 4],
-    /// End colour.
-    pub color_to: [u8; 4],
-    /// Seconds before the colour changes.
-    pub color_delay: f32,
-    /// Seconds the colour change takes.
-    pub color_duration: f32,
-    /// What decides whether it shows while it tweens.
-    pub show: TweenShow,
-    /// Seconds since the transition started.
-    pub elapsed: f32,
-    /// Back-out overshoot.
-    pub overshoot: f32,
-    /// The voxel follows the cloud's spin until then.
-    pub spin_end: f32,
-}
-
-/// What decides whether a tweening voxel shows.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TweenShow {
-    /// A morph's voxel: the visible-count tween (its slot below the count), until `end` seconds (0 for a
-    /// voxel that shows throughout).
-    Count {
-        /// Seconds until which the count decides.
-        end: f32,
-    },
-    /// A voxel popping in on a pose's new cell: shown throughout.
-    Shown,
-    /// A voxel popping out of a pose's emptied cell: shown until the tween ends, hidden then.
-    UntilEnd,
-}
-
-impl Default for TweenShow {
-    fn default() -> Self {
-        TweenShow::Count { end: 0.0 }
-    }
-}
-
-/// The voxels' flights by pool slot (a slot's is live while the slot is `flying`).
-#[derive(Resource, Debug, Default)]
-pub struct VoxelTweens {
-    /// The flights, by slot.
-    tweens: Vec<VoxelTween>,
-    /// At least as many as fly now (none: the step has nothing to do).
-    live: usize,
-}
-
-impl VoxelTweens {
-    /// Starts `tween` on slot `slot` of `pool` (the array grows with the pool).
-    pub fn fly(&mut self, pool: &mut VoxelPool, slot: usize, tween: VoxelTween) {
-        if self.tweens.len() < pool.slots.len() {
-            self.tweens.resize(pool.slots.len(), VoxelTween::default());
-        }
-        self.tweens[slot] = tween;
-        pool.slots[slot].flying = true;
-        self.live += 1;
-    }
-
-    /// The live flights: (slot, tween).
-    pub fn flying<'a>(&'a self, pool: &'a VoxelPool) -> impl Iterator<Item = (usize, &'a VoxelTween)> + 'a {
-        pool.slots.iter().zip(&self.tweens).enumerate().filter(|(_, (s, _))| s.flying).map(|(i, (_, t))| (i, t))
-    }
-}
-
-impl VoxelTween {
-    /// When every part of the tween is over.
-    pub fn end(&self) -> f32 {
-        let count_end = if let TweenShow::Count { end } = self.show { end } else { 0.0 };
-        (self.delay + self.duration).max(self.spin_end).max(self.color_delay + self.color_duration).max(count_end)
-    }
-
-    /// Whether it shows now, given the visible-count tween's `shown` slots.
-    fn shows(&self, slot: usize, shown: f32) -> bool {
-        match self.show {
-            TweenShow::Count { .. } => (slot as f32) < shown,
-            TweenShow::Shown => true,
-            TweenShow::UntilEnd => self.elapsed < self.end(),
-        }
-    }
-
-    /// Position and scale at the tween's current time.
-    pub fn transform(&self) -> (Vec3, Vec3) {
-        let t = ((self.elapsed - self.delay) / self.duration.max(1e-6)).clamp(0.0, 1.0);
-        let k = back_out(t, self.overshoot);
-        (self.from.lerp(self.to, k), self.from_scale.lerp(self.to_scale, k.clamp(0.0, 1.0)))
-    }
-
-    /// Colour at the tween's current time.
-    pub fn color(&self) -> [u8; 4] {
-        let t = ((self.elapsed - self.color_delay) / self.color_duration.max(1e-6)).clamp(0.0, 1.0);
-        std::array::from_fn(|c| {
-            (f32::from(self.color_from[c]) + (f32::from(self.color_to[c]) - f32::from(self.color_from[c])) * t).round()
-                as u8
-        })
-    }
 }
 
 /// Sent when a transition begins (the voxels take off for `model`'s cells).
@@ -363,20 +241,21 @@ pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &Tr
     targets
 }
 
-/// The voxel state a slot is in now: (position, scale, colour, visible).
-type SlotState = (Vec3, Vec3, [u8; 4], bool);
+/// The voxel state a slot is in now: (position in the cloud's frame, scale, colour, visible).
+type SlotState = (Vec3, Vec3, u32, bool);
 
-/// Plans the tween of slot `i` from its current state to the new layout.
+/// Plans the tween of slot `i` from its current state to the new layout (random draws from `rng`), starting
+/// at clock time `start`.
 pub fn plan(
     i: usize,
     now: SlotState,
-    old_count: usize,
     old: &[SlotState],
     new: &[VoxelTarget],
     settings: &TransitionSettings,
+    start: f32,
     rng: &mut Rng,
 ) -> Option<(VoxelTween, VoxelHome)> {
-    let new_count = new.len();
+    let (old_count, new_count) = (old.len(), new.len());
     if i >= old_count.max(new_count) || new.is_empty() {
         return None;
     }
@@ -410,14 +289,15 @@ pub fn plan(
         delay,
         duration,
         color_from,
-        color_to,
+        color_to: pack_color(color_to),
         color_delay,
         color_duration: settings.color_duration,
-        show: TweenShow::Count { end: count_end },
-        elapsed: 0.0,
+        start,
         overshoot: settings.overshoot,
-        spin_end: settings.spin_duration,
-    };
+        show: TweenShow::Count as u32,
+        ..Default::default()
+    }
+    .ending(settings.spin_duration.max(count_end));
     Some((tween, home))
 }
 
@@ -429,6 +309,7 @@ fn start(
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
+    clock: Res<GpuClock>,
     mut active: ResMut<ActiveTransition>,
     mut started: MessageWriter<TransitionStarted>,
     mut reassemble: MessageReader<Reassemble>,
@@ -451,30 +332,35 @@ fn start(
     *last_look = Some(look);
     let transition = if drag.0 { transition.instant() } else { transition.clone() };
     let new = layout(model, &settings, &transition);
-    // Looks are world space; tweens run in the cloud's (model) space.
+    // Where every voxel is drawn now (in flight or not), in the cloud's frame, where tweens run.
     let turn = Turn::new(active.turn());
-    let now: Vec<SlotState> = looks.voxels[..pool.slots.len()]
+    let now: Vec<SlotState> = tweens
+        .drawn(&pool, &looks.items, &clock)
         .iter()
-        .map(|v| (turn.unturn(v.position()), v.scale(), unpack_color(v.color), v.shows()))
+        .map(|v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()))
         .collect();
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
     // joining one not yet shown, is picked up where it is).
     let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
     let old = &now[..old_count];
+    // Each voxel lands on its look, in the model turned by the whole spin.
+    let landed = Turn::new(Quat::from_rotation_y(active.angle + transition.spin_angle));
     let mut rng = Rng::new(active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17));
     let mut end = 0.0f32;
     for (slot, state) in now.iter().enumerate() {
         // The flight starts where the voxel is now, repel displacement included: that is spent.
         pool.slots[slot].repel = RepelOffset::default();
-        match plan(slot, *state, old_count, old, &new, &transition, &mut rng) {
+        match plan(slot, *state, old, &new, &transition, clock.time, &mut rng) {
             Some((tween, home)) => {
-                end = end.max(tween.end());
+                end = end.max(tween.end);
                 pool.slots[slot].home = home;
+                let look = landed.place(tween.to, tween.to_scale, tween.color_to);
+                looks.set(slot, if slot < new.len() { look } else { look.hidden() });
                 tweens.fly(&mut pool, slot, tween);
             }
             None => {
                 pool.slots[slot].flying = false;
-                let hidden = looks.voxels[slot].hidden();
+                let hidden = looks.items[slot].hidden();
                 looks.set(slot, hidden);
             }
         }
@@ -496,8 +382,8 @@ fn start(
     started.write(TransitionStarted { model: id });
 }
 
-/// Steps every voxel tween, a chunk of slots to a task (after the model-level tweens: the spin and the visible
-/// count are this frame's); finished ones snap to their end and land.
+/// Moves the flight clock on (after the model-level tweens: the spin and the visible count are this frame's)
+/// and lands the voxels whose flights are over; the GPU draws the rest from their tweens.
 fn step(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
@@ -505,58 +391,24 @@ fn step(
     mut finished: MessageWriter<TransitionFinished>,
     mut pool: ResMut<VoxelPool>,
     mut tweens: ResMut<VoxelTweens>,
-    mut looks: ResMut<GpuVoxels>,
+    mut clock: ResMut<GpuClock>,
     mut cloud: Query<&mut Transform, With<VoxelCloud>>,
 ) {
     let dt = time.delta_secs() * settings.speed;
     if active.running.is_some() {
         active.elapsed += dt;
     }
-    let rotation = active.turn();
-    let turn = Turn::new(rotation);
+    *clock = GpuClock::new(clock.time + dt, active.angle, active.shown);
     if let Ok(mut cloud) = cloud.single_mut() {
-        cloud.rotation = rotation;
+        cloud.rotation = active.turn();
     }
-    if tweens.live > 0 {
-        tweens.live = step_flights(&mut pool, &mut tweens.tweens, &mut looks, dt, turn, active.shown);
-    }
+    tweens.land(&mut pool, clock.time);
     if let Some((model, end)) = active.running
         && active.elapsed >= end
     {
         active.running = None;
         finished.write(TransitionFinished { model });
     }
-}
-
-/// Steps the flights of `pool`'s flying slots by `dt`, writing their looks (`shown`: the visible-count tween's
-/// slots); returns how many still fly.
-fn step_flights(
-    pool: &mut VoxelPool,
-    tweens: &mut [VoxelTween],
-    looks: &mut GpuVoxels,
-    dt: f32,
-    turn: Turn,
-    shown: f32,
-) -> usize {
-    let flying = AtomicUsize::new(0);
-    let slots = pool.slots.par_chunks_mut(VOXELS_PER_CHUNK);
-    let flights = tweens.par_chunks_mut(VOXELS_PER_CHUNK);
-    slots.zip(flights).zip(looks.pieces()).for_each(|((slots, flights), mut piece)| {
-        let mut still = 0;
-        for (i, (slot, tween)) in slots.iter_mut().zip(flights).enumerate().filter(|(_, (s, _))| s.flying) {
-            tween.elapsed += dt;
-            let (position, scale) = tween.transform();
-            // The colour only moves inside its short window (and lands exactly at its end).
-            let color =
-                if tween.elapsed >= tween.color_delay { pack_color(tween.color()) } else { piece.voxels[i].color };
-            let look = turn.place(position, scale, color);
-            piece.set(i, if tween.shows(piece.start + i, shown) { look } else { look.hidden() });
-            slot.flying = tween.elapsed < tween.end();
-            still += usize::from(slot.flying);
-        }
-        flying.fetch_add(still, Ordering::Relaxed);
-    });
-    flying.into_inner()
 }
 
 /// Placeholder boxes bob gently while nothing is voxelized yet.
@@ -566,7 +418,7 @@ fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut looks: ResMut<Gp
     }
     let t = time.elapsed_secs();
     for slot in 0..pool.slots.len().min(PLACEHOLDER_COUNT) {
-        let mut look = looks.voxels[slot];
+        let mut look = looks.items[slot];
         let phase = slot as f32 * 0.7;
         look.translation[1] += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
         looks.set(slot, look);
@@ -603,7 +455,7 @@ fn show_recolored(
     let Some(id) = pending.take().filter(|id| pool.shown == Some(*id)) else { return };
     let Some(model) = models.get(id) else { return };
     for (slot, target) in layout(model, &settings, &transition).iter().enumerate().take(pool.slots.len()) {
-        let look = GpuVoxel { color: pack_color(target.color), ..looks.voxels[slot] };
+        let look = GpuVoxel { color: pack_color(target.color), ..looks.items[slot] };
         looks.set(slot, look);
     }
 }
@@ -611,7 +463,6 @@ fn show_recolored(
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
-    app.init_resource::<VoxelTweens>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
@@ -634,18 +485,6 @@ pub(super) fn plugin(app: &mut App) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn back_out_three_overshoots_and_lands_on_one() {
-        assert_eq!(back_out(0.0, 3.0), 0.0);
-        assert_eq!(back_out(1.0, 3.0), 1.0);
-        let peak = (1..100).map(|i| back_out(i as f32 / 100.0, 3.0)).fold(0.0f32, f32::max);
-        assert!(peak > 1.2, "back.out(3) peaks at {peak}");
-        // Stronger than the standard 1.70158.
-        let standard = (1..100).map(|i| back_out(i as f32 / 100.0, 1.70158)).fold(0.0f32, f32::max);
-        assert!(peak > standard + 0.05);
-        assert!((standard - 1.1).abs() < 0.01, "the standard back-out overshoots about 10 %: {standard}");
-    }
 
     #[test]
     fn orders_put_layers_and_neighbourhoods_together() {

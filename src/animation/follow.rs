@@ -9,14 +9,12 @@ use std::collections::HashMap;
 use bevy::prelude::*;
 
 use crate::instancing::{
-    GpuVoxel, GpuVoxels, Slot, Turn, VoxelHome, VoxelPool, VoxelTarget, grow_pool, pack_color, targets_for,
-    unpack_color,
+    GpuClock, GpuVoxel, GpuVoxels, Slot, Turn, TweenShow, VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens,
+    grow_pool, pack_color, targets_for,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
-use crate::transition::{
-    ActiveTransition, TransitionSettings, TransitionStarted, TweenShow, VoxelTween, VoxelTweens, layout,
-};
+use crate::transition::{ActiveTransition, TransitionSettings, TransitionStarted, layout};
 
 use super::PosePlaced;
 
@@ -63,24 +61,23 @@ impl CellSlots {
     }
 }
 
-/// A pop: the voxel stays on its cell and scales from `from` to `to`; popping out hides it at the end.
-fn pop(position: Vec3, from: Vec3, to: Vec3, color: [u8; 4], out: bool) -> VoxelTween {
+/// A pop starting at clock time `start`: the voxel stays on its cell and scales from `from` to `to`, shown
+/// throughout (its look says whether it shows once landed: not after popping out).
+fn pop(position: Vec3, from: Vec3, to: Vec3, color: u32, start: f32) -> VoxelTween {
     VoxelTween {
         from: position,
         to: position,
         from_scale: from,
         to_scale: to,
-        delay: 0.0,
         duration: POP_SECONDS,
         color_from: color,
         color_to: color,
-        color_delay: 0.0,
         color_duration: POP_SECONDS,
-        show: if out { TweenShow::UntilEnd } else { TweenShow::Shown },
-        elapsed: 0.0,
-        overshoot: 0.0,
-        spin_end: 0.0,
+        start,
+        show: TweenShow::Always as u32,
+        ..Default::default()
     }
+    .ending(0.0)
 }
 
 /// Whether `model` is the pose of an animated model of the library.
@@ -101,6 +98,7 @@ pub(super) fn follow(
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
+    clock: Res<GpuClock>,
 ) {
     if let Some(morph) = started.read().last() {
         // The morph gives every slot up to the new count a cell (slot i: cell i of the layout).
@@ -130,13 +128,14 @@ pub(super) fn follow(
     let mut wanted: HashMap<CellKey, &VoxelTarget> = targets.iter().map(|t| (key(t.position), t)).collect();
     cells.retain(|cell, slot| {
         let i = *slot as usize;
-        let look = looks.voxels[i];
+        let look = looks.items[i];
         if let Some(target) = wanted.remove(cell) {
             looks.set(i, GpuVoxel { color: pack_color(target.color), ..look });
             return true;
         }
         let position = pool.slots[i].home.position;
-        tweens.fly(&mut pool, i, pop(position, look.scale(), Vec3::ZERO, unpack_color(look.color), true));
+        tweens.fly(&mut pool, i, pop(position, look.scale(), Vec3::ZERO, look.color, clock.time));
+        looks.set(i, look.hidden());
         pool.slots[i].vacant = true;
         leaving.insert(*slot, *cell);
         false
@@ -151,7 +150,7 @@ pub(super) fn follow(
         let (slot, from) = match returning.remove(&cell) {
             Some(slot) => {
                 leaving.remove(&slot);
-                (slot, looks.voxels[slot as usize].scale().max(target.scale * POP_SPECK))
+                (slot, looks.items[slot as usize].scale().max(target.scale * POP_SPECK))
             }
             None => {
                 while next_free < used.len() && used[next_free] {
@@ -170,8 +169,9 @@ pub(super) fn follow(
         let VoxelTarget { position, scale, color, part } = *target;
         let i = slot as usize;
         pool.slots[i] = Slot { home: VoxelHome { position, scale, part }, ..Slot::default() };
-        looks.set(i, turn.place(position, from, pack_color(color)));
-        tweens.fly(&mut pool, i, pop(position, from, scale, color, false));
+        let color = pack_color(color);
+        looks.set(i, turn.place(position, scale, color));
+        tweens.fly(&mut pool, i, pop(position, from, scale, color, clock.time));
     }
     pool.visible = used.iter().rposition(|u| *u).map_or(0, |last| last + 1);
 }

@@ -6,6 +6,7 @@
 //! hides its spares. While no model is ready, random pastel boxes float in its place. The `transition` plugin
 //! lays models out.
 
+pub mod flight;
 pub mod gpu;
 pub mod material;
 pub mod mesh;
@@ -15,7 +16,8 @@ use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 
-pub use gpu::{Detail, GpuVoxel, GpuVoxels, Piece, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
+pub use flight::{GpuClock, TweenShow, VoxelTween, VoxelTweens, back_out, flown};
+pub use gpu::{Detail, GpuVoxel, GpuVoxels, Mirror, Piece, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
 pub use material::{ChunkLayout, VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 
 use voxel_core::Voxel;
@@ -39,6 +41,8 @@ pub struct VoxelAssets {
     pub low_chunk_mesh: Handle<Mesh>,
     /// The one material.
     pub material: Handle<VoxelMaterial>,
+    /// The flight clock's buffer.
+    pub clock: Handle<ShaderBuffer>,
 }
 
 impl FromWorld for VoxelAssets {
@@ -51,15 +55,18 @@ impl FromWorld for VoxelAssets {
         let mut meshes = world.resource_mut::<Assets<Mesh>>();
         let (mesh, low_mesh) = (meshes.add(shape), meshes.add(low));
         let (chunk_mesh, low_chunk_mesh) = (meshes.add(chunk), meshes.add(low_chunk));
-        // A placeholder until the pool has voxels (the render side replaces it at the pool's size).
-        let size = VOXELS_PER_CHUNK * size_of::<GpuVoxel>();
-        let voxels = world
-            .resource_mut::<Assets<ShaderBuffer>>()
-            .add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
-        let mut material = voxel_material(voxels);
+        // Placeholders until the pool has voxels (the render side replaces them at the pool's size), and the
+        // clock, written every frame.
+        let mut buffers = world.resource_mut::<Assets<ShaderBuffer>>();
+        let mut buffer =
+            |size| buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
+        let voxels = buffer(VOXELS_PER_CHUNK * size_of::<GpuVoxel>());
+        let flights = buffer(VOXELS_PER_CHUNK * size_of::<VoxelTween>());
+        let clock = buffer(size_of::<GpuClock>());
+        let mut material = voxel_material(voxels, flights, clock.clone());
         material.extension.layout = layout;
         let material = world.resource_mut::<Assets<VoxelMaterial>>().add(material);
-        Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material }
+        Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material, clock }
     }
 }
 
@@ -236,7 +243,7 @@ pub fn apply_targets(pool: &mut VoxelPool, looks: &mut GpuVoxels, targets: &[Vox
     for slot in 0..pool.slots.len() {
         let look = match targets.get(slot) {
             Some(t) => turn.place(t.position, t.scale, pack_color(t.color)),
-            None => looks.voxels[slot].hidden(),
+            None => looks.items[slot].hidden(),
         };
         looks.set(slot, look);
     }
@@ -259,11 +266,16 @@ fn grow_for_current(
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelPool>();
     app.init_resource::<GpuVoxels>();
+    app.init_resource::<VoxelTweens>();
+    app.init_resource::<GpuClock>();
     app.init_resource::<VoxelAssets>();
     app.register_type::<VoxelCloud>();
     app.add_systems(Startup, setup);
     app.add_systems(Update, grow_for_current.in_set(InstancingSystems::Grow));
-    app.add_systems(PostUpdate, gpu::gather.in_set(InstancingSystems::Gather));
+    app.add_systems(
+        PostUpdate,
+        (gpu::gather::<GpuVoxels>, gpu::gather::<VoxelTweens>).in_set(InstancingSystems::Gather),
+    );
 }
 
 /// Rendering: the material's pipeline, the voxel buffer and the chunks that draw it.

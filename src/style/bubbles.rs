@@ -7,12 +7,12 @@ use bevy::prelude::*;
 use rayon::prelude::*;
 
 use super::Style;
-use crate::instancing::{GpuVoxels, Turn, VoxelPool};
+use crate::instancing::{GpuVoxels, Turn, VoxelPool, back_out};
 use crate::rng::Rng;
 use crate::schedule::StyleSystems;
 use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
-use crate::transition::{ActiveTransition, back_out};
+use crate::transition::ActiveTransition;
 
 use super::repel::away_from_ray;
 
@@ -114,7 +114,7 @@ fn take_bubbles(
     let turn = Turn::new(active.turn());
     // A voxel in flight is placed by its tween; a vacant slot stays hidden.
     for (i, slot) in pool.slots.iter().enumerate().take(pool.visible).filter(|(_, s)| s.at_home()) {
-        let look = turn.place(slot.home.position + slot.repel.offset, slot.home.scale, looks.voxels[i].color);
+        let look = turn.place(slot.home.position + slot.repel.offset, slot.home.scale, looks.items[i].color);
         looks.set(i, look);
     }
 }

@@ -157,8 +157,8 @@ fn control(
     grow_pool(&mut pool, &mut looks, needed);
     // In slot order, so the pile does not depend on anything else.
     let shown: Vec<(u32, Vec3)> = (0..pool.slots.len())
-        .filter(|&i| !pool.slots[i].flying && looks.voxels[i].shows())
-        .map(|i| (i as u32, looks.voxels[i].position()))
+        .filter(|&i| !pool.slots[i].flying && looks.items[i].shows())
+        .map(|i| (i as u32, looks.items[i].position()))
         .collect();
     if shown.is_empty() {
         return;
@@ -205,7 +205,7 @@ fn sync(pile: Res<FallingPile>, mut looks: ResMut<GpuVoxels>) {
     }
     for v in &pile.voxels {
         if let Some(p) = pile.pile.positions.get(v.body as usize) {
-            let mut look = looks.voxels[v.slot as usize];
+            let mut look = looks.items[v.slot as usize];
             look.translation = (*p + v.offset).into();
             looks.set(v.slot as usize, look);
         }

@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use rayon::prelude::*;
 
 use super::Style;
-use crate::instancing::{GpuVoxels, Piece, Slot, Turn, VOXELS_PER_CHUNK, VoxelPool};
+use crate::instancing::{GpuVoxel, GpuVoxels, Piece, Slot, Turn, VOXELS_PER_CHUNK, VoxelPool};
 use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
@@ -52,7 +52,7 @@ impl Placement {
         displaced.into_inner()
     }
 
-    fn place_piece(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, piece: &mut Piece) -> bool {
+    fn place_piece(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, piece: &mut Piece<GpuVoxel>) -> bool {
         let turn = Turn::new(self.rotation);
         let mut displaced = false;
         for (i, slot) in slots.iter_mut().enumerate() {
@@ -81,9 +81,9 @@ impl Placement {
                     let (grow, shown) = b.scale(&self.bubbles);
                     (b.wobble(self.time, home.part, self.bubbles.wobble) * home.scale.max_element(), grow, shown)
                 }
-                None => (Vec3::ZERO, 1.0, piece.voxels[i].shows()),
+                None => (Vec3::ZERO, 1.0, piece.items[i].shows()),
             };
-            let look = turn.place(home.position + wobble + repel.offset, home.scale * grow, piece.voxels[i].color);
+            let look = turn.place(home.position + wobble + repel.offset, home.scale * grow, piece.items[i].color);
             piece.set(i, if shown { look } else { look.hidden() });
         }
         displaced
@@ -162,7 +162,7 @@ mod tests {
 
         /// Whether voxel `i` was written (it moved from where it started).
         fn written(&self, i: usize) -> bool {
-            self.looks.voxels[i].position() != Vec3::ZERO
+            self.looks.items[i].position() != Vec3::ZERO
         }
     }
 
@@ -194,7 +194,7 @@ mod tests {
         assert!(voxels.slots[1].repel.offset.x < 0.0 && voxels.slots[3].repel.offset.x > 0.0);
         // Placed in the turned cloud: home + offset, rotated a quarter turn about y, its colour kept.
         let expected = p.rotation * (voxels.slots[3].home.position + voxels.slots[3].repel.offset);
-        let look = voxels.looks.voxels[3];
+        let look = voxels.looks.items[3];
         assert!(look.position().distance(expected) < 1e-5);
         assert!(look.x_axis[0].abs() < 1e-6 && (look.x_axis[1] + 1.0).abs() < 1e-6, "turned: {:?}", look.x_axis);
         assert_eq!(look.color, UNPLACED);
@@ -209,9 +209,9 @@ mod tests {
         }
         let held = voxels.slots[3].repel;
         assert!(held.velocity == Vec3::ZERO && held.offset.length() > 0.1, "{held:?}");
-        let before = voxels.looks.voxels.clone();
+        let before = voxels.looks.items.clone();
         assert!(voxels.place(&p), "held voxels are still off their cells");
-        assert_eq!(voxels.looks.voxels, before, "held voxels rewritten");
+        assert_eq!(voxels.looks.items, before, "held voxels rewritten");
     }
 
     #[test]
@@ -230,7 +230,7 @@ mod tests {
             voxels.place(&gone);
         }
         assert!(!voxels.place(&gone), "springs still moving after 2 s");
-        assert!(voxels.looks.voxels[4].position().distance(gone.rotation * voxels.slots[4].home.position) < 1e-5);
+        assert!(voxels.looks.items[4].position().distance(gone.rotation * voxels.slots[4].home.position) < 1e-5);
     }
 
     #[test]
@@ -241,7 +241,7 @@ mod tests {
         voxels.place(&p);
         for i in [0, VOXELS_PER_CHUNK, n - 1] {
             let expected = p.rotation * (voxels.slots[i].home.position + voxels.slots[i].repel.offset);
-            assert!(voxels.looks.voxels[i].position().distance(expected) < 1e-2, "voxel {i}");
+            assert!(voxels.looks.items[i].position().distance(expected) < 1e-2, "voxel {i}");
             assert!(!voxels.slots[i].repel.is_rest(), "voxel {i}");
         }
     }
@@ -251,11 +251,11 @@ mod tests {
         let mut gone = Voxels::row(3, Some(BubbleState::Gone(0.5)));
         let far = Placement { ray: None, time: 0.7, ..placement(0.0, 3) };
         gone.place(&far);
-        assert!(gone.looks.voxels[..3].iter().all(|v| !v.shows()));
+        assert!(gone.looks.items[..3].iter().all(|v| !v.shows()));
         let mut whole = Voxels::row(3, Some(BubbleState::Whole));
         whole.place(&far);
-        assert!(whole.looks.voxels[..3].iter().all(|v| v.shows()));
-        let off_cell = whole.looks.voxels[1].position().distance(far.rotation * whole.slots[1].home.position);
+        assert!(whole.looks.items[..3].iter().all(|v| v.shows()));
+        let off_cell = whole.looks.items[1].position().distance(far.rotation * whole.slots[1].home.position);
         assert!(off_cell > 1e-3 && off_cell < 0.3, "wobble {off_cell}");
     }
 }

@@ -39,7 +39,7 @@ fn home_world(app: &mut App, slot: usize) -> Vec3 {
 
 /// World position of a slot's voxel now.
 fn translation(app: &mut App, slot: usize) -> Vec3 {
-    app.world().resource::<GpuVoxels>().voxels[slot].position()
+    app.world().resource::<GpuVoxels>().items[slot].position()
 }
 
 fn drop_pile(seed_runs: usize) -> Vec<Vec3> {

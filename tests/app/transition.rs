@@ -5,12 +5,13 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
+use voxel_art::instancing::VoxelTween;
 use voxel_art::instancing::{VoxelCloud, VoxelPool, unpack_color};
 use voxel_art::library::LibraryRequest;
 use voxel_art::settings::VoxelSettings;
-use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
+use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, layout};
 
-use crate::harness::{all_settled, flights, looks, run_until, test_app, turn};
+use crate::harness::{all_settled, drawn, flights, looks, run_until, test_app, turn};
 use crate::logic::shown_model;
 
 /// Steps until no voxel carries a tween (at most 10 s of app time).
@@ -64,10 +65,10 @@ fn ready_app() -> App {
     app
 }
 
-/// Positions of the visible voxels in the cloud's (model) frame.
+/// Positions of the visible voxels in the cloud's (model) frame, as drawn.
 fn positions(app: &mut App) -> HashMap<usize, Vec3> {
     let turn = turn(app);
-    looks(app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, turn.unturn(v.position()))).collect()
+    drawn(app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, turn.unturn(v.position()))).collect()
 }
 
 #[test]
@@ -172,7 +173,7 @@ fn the_spin_and_the_visible_count_follow_their_model_level_tweens() {
         let count = old + (new - old) * (s / t.count_duration).min(1.0);
         assert!((active.shown - count).abs() < 0.01 * (new - old).abs() + 1.0, "frame {k}: count {}", active.shown);
         let shown = active.shown;
-        let visible = looks(&app).iter().filter(|v| v.shows()).count() as f32;
+        let visible = drawn(&app).iter().filter(|v| v.shows()).count() as f32;
         assert!((visible - shown).abs() <= 1.0, "frame {k}: {visible} voxels show for a count of {shown}");
         let mut tweens = app.world_mut().query::<&ModelTween>();
         assert!(tweens.iter(app.world()).count() <= 2, "model-level tweens are replaced, never stacked");
