@@ -16,10 +16,12 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
+use rayon::prelude::*;
 
 use crate::instancing::{
-    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Turn, TweenShow, VoxelCloud, VoxelHome, VoxelPool,
-    VoxelTarget, VoxelTween, VoxelTweens, apply_targets, drawn_count, pack_color, placeholder_targets, targets_for,
+    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Slot, Turn, TweenShow, VOXELS_PER_CHUNK, VoxelCloud,
+    VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens, apply_targets, drawn_count, pack_color,
+    placeholder_targets, targets_for,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
@@ -217,21 +219,36 @@ fn morton(p: Vec3, lo: Vec3, size: f32) -> u32 {
     spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2
 }
 
-/// Sorts targets per the assignment so slot i of the old layout flies to a nearby rank of the new one.
+/// Sorts targets per the assignment so slot i of the old layout flies to a nearby rank of the new one (keys
+/// computed once per target, sorted in parallel; equal keys keep their order).
 pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
     match assignment {
         Assignment::Grid => {}
-        Assignment::Height => targets.sort_by(|a, b| {
+        Assignment::Height => {
             let angle = |p: Vec3| p.z.atan2(p.x);
-            a.position.y.total_cmp(&b.position.y).then(angle(a.position).total_cmp(&angle(b.position)))
-        }),
+            sort_by_key(targets, |t| (ordered(t.position.y), ordered(angle(t.position))));
+        }
         Assignment::Morton => {
             let lo = targets.iter().fold(Vec3::splat(f32::MAX), |m, t| m.min(t.position));
             let hi = targets.iter().fold(Vec3::splat(f32::MIN), |m, t| m.max(t.position));
             let size = (hi - lo).max_element().max(1e-6);
-            targets.sort_by_key(|t| morton(t.position, lo, size));
+            sort_by_key(targets, |t| morton(t.position, lo, size));
         }
     }
+}
+
+/// A float's bits in an order that agrees with `f32::total_cmp`.
+fn ordered(f: f32) -> u32 {
+    let bits = f.to_bits();
+    if bits >> 31 == 1 { !bits } else { bits | 1 << 31 }
+}
+
+/// Sorts `targets` by `key`, stably.
+fn sort_by_key<K: Ord + Send>(targets: &mut [VoxelTarget], key: impl Fn(&VoxelTarget) -> K + Sync) {
+    let mut keyed: Vec<(K, u32)> = targets.par_iter().enumerate().map(|(i, t)| (key(t), i as u32)).collect();
+    keyed.par_sort_unstable();
+    let sorted: Vec<VoxelTarget> = keyed.iter().map(|(_, i)| targets[*i as usize]).collect();
+    targets.copy_from_slice(&sorted);
 }
 
 /// The layout a model is shown with (ordered per the assignment).
@@ -301,6 +318,66 @@ pub fn plan(
     Some((tween, home))
 }
 
+/// Everything a morph's flights are planned from.
+struct Flights<'a> {
+    /// Where the voxels that show now are (slot order, up to the last that shows).
+    old: &'a [SlotState],
+    /// The new layout.
+    new: &'a [VoxelTarget],
+    /// The timings.
+    settings: &'a TransitionSettings,
+    /// The clock time the morph starts.
+    start: f32,
+    /// The model's turn once the spin is over.
+    landed: Turn,
+    /// The morph's random seed (each chunk of slots draws from its own generator).
+    seed: u64,
+}
+
+impl Flights<'_> {
+    /// Plans every slot's flight from `now` (a chunk of slots to a task): its tween, its home and the look it
+    /// lands on; a slot with no part in the morph hides. Returns when the last voxel lands.
+    fn plan_all(
+        &self,
+        pool: &mut VoxelPool,
+        now: &[SlotState],
+        looks: &mut GpuVoxels,
+        tweens: &mut VoxelTweens,
+    ) -> f32 {
+        let slots = pool.slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(now.par_chunks(VOXELS_PER_CHUNK));
+        slots
+            .zip(looks.pieces())
+            .zip(tweens.pieces())
+            .enumerate()
+            .map(|(c, (((slots, now), mut looks), (mut flights, in_air)))| {
+                let mut rng = Rng::new(self.seed ^ (c as u64).wrapping_mul(0x2545_f491_4f6c_dd1d));
+                let mut end = 0.0f32;
+                for (i, (slot, state)) in slots.iter_mut().zip(now).enumerate() {
+                    let index = looks.start + i;
+                    // The flight starts where the voxel is now, repel displacement included: that is spent.
+                    slot.repel = RepelOffset::default();
+                    match plan(index, *state, self.old, self.new, self.settings, self.start, &mut rng) {
+                        Some((tween, home)) => {
+                            end = end.max(tween.end);
+                            *slot = Slot { home, flying: true, ..*slot };
+                            *in_air = true;
+                            let look = self.landed.place(tween.to, tween.to_scale, tween.color_to);
+                            looks.set(i, if index < self.new.len() { look } else { look.hidden() });
+                            flights.set(i, tween);
+                        }
+                        None => {
+                            slot.flying = false;
+                            let hidden = looks.items[i].hidden();
+                            looks.set(i, hidden);
+                        }
+                    }
+                }
+                end
+            })
+            .reduce(|| 0.0, f32::max)
+    }
+}
+
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
 /// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked. While a
 /// voxelization setting is dragged the transition is instant: `step`, next in the chain, lands every voxel.
@@ -336,35 +413,23 @@ fn start(
     let turn = Turn::new(active.turn());
     let now: Vec<SlotState> = tweens
         .drawn(&pool, &looks.items, &clock)
-        .iter()
+        .par_iter()
         .map(|v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()))
         .collect();
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
     // joining one not yet shown, is picked up where it is).
     let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
-    let old = &now[..old_count];
-    // Each voxel lands on its look, in the model turned by the whole spin.
-    let landed = Turn::new(Quat::from_rotation_y(active.angle + transition.spin_angle));
-    let mut rng = Rng::new(active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17));
-    let mut end = 0.0f32;
-    for (slot, state) in now.iter().enumerate() {
-        // The flight starts where the voxel is now, repel displacement included: that is spent.
-        pool.slots[slot].repel = RepelOffset::default();
-        match plan(slot, *state, old, &new, &transition, clock.time, &mut rng) {
-            Some((tween, home)) => {
-                end = end.max(tween.end);
-                pool.slots[slot].home = home;
-                let look = landed.place(tween.to, tween.to_scale, tween.color_to);
-                looks.set(slot, if slot < new.len() { look } else { look.hidden() });
-                tweens.fly(&mut pool, slot, tween);
-            }
-            None => {
-                pool.slots[slot].flying = false;
-                let hidden = looks.items[slot].hidden();
-                looks.set(slot, hidden);
-            }
-        }
-    }
+    let flights = Flights {
+        old: &now[..old_count],
+        new: &new,
+        settings: &transition,
+        start: clock.time,
+        // Each voxel lands on its look, in the model turned by the whole spin.
+        landed: Turn::new(Quat::from_rotation_y(active.angle + transition.spin_angle)),
+        seed: active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17),
+    };
+    tweens.reserve(pool.slots.len());
+    let end = flights.plan_all(&mut pool, &now, &mut looks, &mut tweens);
     // The model-level tweens: the spin and the visible count (the last transition's are replaced).
     for tween in &model_tweens {
         commands.entity(tween).despawn();

@@ -10,7 +10,7 @@ use bevy::render::storage::ShaderBuffer;
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 
-use super::gpu::{GpuVoxel, Mirror, Mirrored, Record};
+use super::gpu::{GpuVoxel, Mirror, Mirrored, Piece, Record};
 use super::{VOXELS_PER_CHUNK, VoxelMaterial, VoxelPool};
 
 /// Back-out easing with overshoot `s` (the article's `back.out(3)`; Bevy's `BackOut` uses 1.70158).
@@ -140,12 +140,14 @@ pub fn flown(look: &GpuVoxel, tween: &VoxelTween, slot: usize, clock: &GpuClock)
     if shows { placed } else { placed.hidden() }
 }
 
-/// The voxels' flights by pool slot, the GPU buffer's mirror (a slot's is live while the pool slot is `flying`).
+/// The voxels' flights by pool slot, the GPU buffer's mirror. A pool slot is `flying` from its tween's start
+/// until every tween of its chunk is over (the GPU draws each voxel's look from its own tween's end on): landing
+/// is decided a chunk at a time, from the chunk's latest end, without reading a tween.
 #[derive(Resource, Debug, Default)]
 pub struct VoxelTweens {
     mirror: Mirror<VoxelTween>,
-    /// At least as many as fly now (none: nothing to land).
-    live: usize,
+    /// A flag per chunk: some slot of it may still fly.
+    in_air: Vec<bool>,
 }
 
 impl Mirrored for VoxelTweens {
@@ -159,12 +161,24 @@ impl Mirrored for VoxelTweens {
 }
 
 impl VoxelTweens {
+    /// Makes room for the tweens of `slots` slots.
+    pub fn reserve(&mut self, slots: usize) {
+        self.mirror.reserve(slots);
+        self.in_air.resize(self.mirror.items.len() / VOXELS_PER_CHUNK, false);
+    }
+
     /// Starts `tween` on slot `slot` of `pool`.
     pub fn fly(&mut self, pool: &mut VoxelPool, slot: usize, tween: VoxelTween) {
-        self.mirror.reserve(pool.slots.len());
+        self.reserve(pool.slots.len());
         self.mirror.set(slot, tween);
         pool.slots[slot].flying = true;
-        self.live += 1;
+        self.in_air[slot / VOXELS_PER_CHUNK] = true;
+    }
+
+    /// The chunks of tweens as pieces for tasks that start flights in parallel (zip them with the pool's slots
+    /// chunked by [`VOXELS_PER_CHUNK`]), with each chunk's in-air flag (set it when a slot of the chunk takes off).
+    pub fn pieces(&mut self) -> impl IndexedParallelIterator<Item = (Piece<'_, VoxelTween>, &mut bool)> {
+        self.mirror.pieces().zip(self.in_air.par_iter_mut())
     }
 
     /// Slot `slot`'s tween (the last it flew).
@@ -177,31 +191,20 @@ impl VoxelTweens {
         pool.slots.iter().zip(&self.mirror.items).enumerate().filter(|(_, (s, _))| s.flying).map(|(i, (_, t))| (i, t))
     }
 
-    /// Lands the flights that are over at clock time `time` (their looks are where they land): nothing to do
-    /// while none flies.
+    /// Lands the chunks whose tweens are all over at clock time `time`.
     pub fn land(&mut self, pool: &mut VoxelPool, time: f32) {
-        if self.live == 0 {
-            return;
+        for (c, slots) in pool.slots.chunks_mut(VOXELS_PER_CHUNK).enumerate() {
+            if self.in_air.get(c).is_some_and(|a| *a) && self.mirror.chunk_weight(c) <= time {
+                slots.iter_mut().for_each(|s| s.flying = false);
+                self.in_air[c] = false;
+            }
         }
-        let tweens = &self.mirror.items;
-        self.live = pool
-            .slots
-            .par_chunks_mut(VOXELS_PER_CHUNK)
-            .zip(tweens.par_chunks(VOXELS_PER_CHUNK))
-            .map(|(slots, tweens)| {
-                let mut still = 0;
-                for (slot, tween) in slots.iter_mut().zip(tweens).filter(|(s, _)| s.flying) {
-                    slot.flying = tween.flies(time);
-                    still += usize::from(slot.flying);
-                }
-                still
-            })
-            .sum();
     }
 
-    /// Drawn: every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
+    /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
     pub fn drawn(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> Vec<GpuVoxel> {
         (0..pool.slots.len())
+            .into_par_iter()
             .map(|i| match self.get(i).filter(|_| pool.slots[i].flying) {
                 Some(tween) => flown(&looks[i], tween, i, clock),
                 None => looks[i],

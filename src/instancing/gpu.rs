@@ -107,22 +107,25 @@ pub struct Mirror<T> {
     pub whole: bool,
 }
 
-/// One chunk of a mirror handed to one task: its records and its changed flag.
+/// One chunk of a mirror handed to one task: its records, its changed flag and its weight.
 pub struct Piece<'a, T> {
     /// The slot of its first record.
     pub start: usize,
     /// Its records.
     pub items: &'a mut [T],
     dirty: &'a mut bool,
+    weight: &'a mut f32,
 }
 
-impl<T: PartialEq> Piece<'_, T> {
-    /// Sets record `i` of the piece, marking the chunk changed when it is.
+impl<T: Record> Piece<'_, T> {
+    /// Sets record `i` of the piece, marking the chunk changed when it is (and raising its weight, as
+    /// [`Mirror::set`]).
     #[inline]
     pub fn set(&mut self, i: usize, item: T) {
         if self.items[i] != item {
             self.items[i] = item;
             *self.dirty = true;
+            *self.weight = self.weight.max(item.weight());
         }
     }
 }
@@ -138,24 +141,28 @@ impl<T: Record> Mirror<T> {
         self.weights.get(c).copied().unwrap_or(0.0)
     }
 
-    /// Sets slot `slot` to `item`, marking its chunk changed when it is (a slot past the buffer's end, which the
-    /// pool's cap keeps from happening, is not drawn).
+    /// Sets slot `slot` to `item`, marking its chunk changed when it is and raising its chunk's weight to the
+    /// item's at once (the gather weighs it exactly); a slot past the buffer's end, which the pool's cap keeps from
+    /// happening, is not drawn.
     pub fn set(&mut self, slot: usize, item: T) {
         let Some(old) = self.items.get_mut(slot) else { return };
         if *old != item {
             *old = item;
-            self.dirty[slot / VOXELS_PER_CHUNK] = true;
+            let c = slot / VOXELS_PER_CHUNK;
+            self.dirty[c] = true;
+            self.weights[c] = self.weights[c].max(item.weight());
         }
     }
 
     /// The chunks as pieces, for tasks that write records in parallel (zip them with the pool's slots chunked by
     /// [`VOXELS_PER_CHUNK`]).
     pub fn pieces(&mut self) -> impl IndexedParallelIterator<Item = Piece<'_, T>> {
-        self.items
-            .par_chunks_mut(VOXELS_PER_CHUNK)
+        let chunks = self.items.par_chunks_mut(VOXELS_PER_CHUNK);
+        chunks
             .zip(self.dirty.par_iter_mut())
+            .zip(self.weights.par_iter_mut())
             .enumerate()
-            .map(|(c, (items, dirty))| Piece { start: c * VOXELS_PER_CHUNK, items, dirty })
+            .map(|(c, ((items, dirty), weight))| Piece { start: c * VOXELS_PER_CHUNK, items, dirty, weight })
     }
 
     /// Turns the changed chunks into this frame's upload ranges and weighs them again.
