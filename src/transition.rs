@@ -12,6 +12,7 @@
 //! flights are over.
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
@@ -258,6 +259,53 @@ pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &Tr
     targets
 }
 
+/// What a layout depends on besides its model's contents: the model, the box size, hollow, the assignment.
+type LayoutKey = (AssetId<VoxelModelAsset>, u32, bool, Assignment);
+
+/// The last few layouts made (a morph back to a model, a recolour and the animation's map reuse them), each
+/// forgotten when its model changes.
+#[derive(Resource, Debug, Default)]
+pub struct Layouts(Vec<(LayoutKey, Arc<[VoxelTarget]>)>);
+
+impl Layouts {
+    /// Layouts kept.
+    const KEPT: usize = 3;
+
+    /// Model `id`'s layout (`model`) with these settings, made if it is not kept.
+    pub fn of(
+        &mut self,
+        id: AssetId<VoxelModelAsset>,
+        model: &VoxelModelAsset,
+        settings: &VoxelSettings,
+        transition: &TransitionSettings,
+    ) -> Arc<[VoxelTarget]> {
+        let key = (id, settings.box_size.to_bits(), settings.hollow, transition.assignment);
+        if let Some((_, kept)) = self.0.iter().find(|(k, _)| *k == key) {
+            return kept.clone();
+        }
+        let made: Arc<[VoxelTarget]> = layout(model, settings, transition).into();
+        if self.0.len() == Self::KEPT {
+            self.0.remove(0);
+        }
+        self.0.push((key, made.clone()));
+        made
+    }
+
+    /// Forgets the layouts of the models that changed or went.
+    fn forget(&mut self, events: &mut MessageReader<AssetEvent<VoxelModelAsset>>) {
+        for event in events.read() {
+            if let AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } = event {
+                self.forget_model(*id);
+            }
+        }
+    }
+
+    /// Forgets model `id`'s layouts (its colours changed this frame: its asset event comes later).
+    fn forget_model(&mut self, id: AssetId<VoxelModelAsset>) {
+        self.0.retain(|((model, ..), _)| *model != id);
+    }
+}
+
 /// The voxel state a slot is in now: (position in the cloud's frame, scale, colour, visible).
 type SlotState = (Vec3, Vec3, u32, bool);
 
@@ -396,8 +444,15 @@ fn start(
     transition: Res<TransitionSettings>,
     drag: Res<SettingDrag>,
     model_tweens: Query<Entity, With<ModelTween>>,
-    mut last_look: Local<Option<(f32, bool)>>,
+    (mut layouts, mut changed, mut recolored): (
+        ResMut<Layouts>,
+        MessageReader<AssetEvent<VoxelModelAsset>>,
+        MessageReader<Recolored>,
+    ),
+    (mut last_look, mut now): (Local<Option<(f32, bool)>>, Local<Vec<SlotState>>),
 ) {
+    layouts.forget(&mut changed);
+    recolored.read().for_each(|r| layouts.forget_model(r.model));
     let restart = reassemble.read().count() > 0;
     let Some((id, model)) = library.current_ready(&models) else { return };
     // A new box size or the hollow switch lays the model out again.
@@ -408,14 +463,16 @@ fn start(
     }
     *last_look = Some(look);
     let transition = if drag.0 { transition.instant() } else { transition.clone() };
-    let new = layout(model, &settings, &transition);
+    let new = layouts.of(id, model, &settings, &transition);
     // Where every voxel is drawn now (in flight or not), in the cloud's frame, where tweens run.
     let turn = Turn::new(active.turn());
-    let now: Vec<SlotState> = tweens
-        .drawn(&pool, &looks.items, &clock)
-        .par_iter()
-        .map(|v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()))
-        .collect();
+    tweens.drawn_into(
+        &pool,
+        &looks.items,
+        &clock,
+        |v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()),
+        &mut now,
+    );
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
     // joining one not yet shown, is picked up where it is).
     let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
@@ -510,16 +567,20 @@ fn show_recolored(
     (settings, transition, active): (Res<VoxelSettings>, Res<TransitionSettings>, Res<ActiveTransition>),
     pool: Res<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
+    mut layouts: ResMut<Layouts>,
 ) {
-    if let Some(r) = recolored.read().filter(|r| pool.shown == Some(r.model)).last() {
-        *pending = Some(r.model);
+    for r in recolored.read() {
+        layouts.forget_model(r.model);
+        if pool.shown == Some(r.model) {
+            *pending = Some(r.model);
+        }
     }
     if active.running.is_some() {
         return;
     }
     let Some(id) = pending.take().filter(|id| pool.shown == Some(*id)) else { return };
     let Some(model) = models.get(id) else { return };
-    for (slot, target) in layout(model, &settings, &transition).iter().enumerate().take(pool.slots.len()) {
+    for (slot, target) in layouts.of(id, model, &settings, &transition).iter().enumerate().take(pool.slots.len()) {
         let look = GpuVoxel { color: pack_color(target.color), ..looks.items[slot] };
         looks.set(slot, look);
     }
@@ -528,6 +589,7 @@ fn show_recolored(
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
+    app.init_resource::<Layouts>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();

@@ -14,7 +14,7 @@ use crate::instancing::{
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
-use crate::transition::{ActiveTransition, TransitionSettings, TransitionStarted, layout};
+use crate::transition::{ActiveTransition, Layouts, TransitionSettings, TransitionStarted};
 
 use super::PosePlaced;
 
@@ -99,13 +99,14 @@ pub(super) fn follow(
     mut looks: ResMut<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
     clock: Res<GpuClock>,
+    mut layouts: ResMut<Layouts>,
 ) {
     if let Some(morph) = started.read().last() {
         // The morph gives every slot up to the new count a cell (slot i: cell i of the layout).
         pool.slots.iter_mut().for_each(|s| s.vacant = false);
         *slots = CellSlots::default();
         if let Some(model) = models.get(morph.model).filter(|_| is_pose(&library, morph.model)) {
-            let laid_out = layout(model, &settings, &transition);
+            let laid_out = layouts.of(morph.model, model, &settings, &transition);
             slots.cells = laid_out.iter().enumerate().map(|(i, t)| (key(t.position), i as u32)).collect();
             slots.model = Some(morph.model);
         }

@@ -203,13 +203,29 @@ impl VoxelTweens {
 
     /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
     pub fn drawn(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> Vec<GpuVoxel> {
+        let mut drawn = Vec::new();
+        self.drawn_into(pool, looks, clock, |v| v, &mut drawn);
+        drawn
+    }
+
+    /// [`Self::drawn`], each voxel mapped by `map`, into `out` (whose memory is reused).
+    pub fn drawn_into<T: Send>(
+        &self,
+        pool: &VoxelPool,
+        looks: &[GpuVoxel],
+        clock: &GpuClock,
+        map: impl Fn(GpuVoxel) -> T + Sync,
+        out: &mut Vec<T>,
+    ) {
         (0..pool.slots.len())
             .into_par_iter()
-            .map(|i| match self.get(i).filter(|_| pool.slots[i].flying) {
-                Some(tween) => flown(&looks[i], tween, i, clock),
-                None => looks[i],
+            .map(|i| {
+                map(match self.get(i).filter(|_| pool.slots[i].flying) {
+                    Some(tween) => flown(&looks[i], tween, i, clock),
+                    None => looks[i],
+                })
             })
-            .collect()
+            .collect_into_vec(out);
     }
 }
 
