@@ -15,9 +15,9 @@ struct Voxel {
 // One voxel's flight (96 bytes, `VoxelTween` in src/transition.rs): from and to in the model's frame, seconds
 // after `start` on the flight clock.
 struct Flight {
-    from: vec3<f32>,
+    from_position: vec3<f32>,
     delay: f32,
-    to: vec3<f32>,
+    to_position: vec3<f32>,
     duration: f32,
     from_scale: vec3<f32>,
     color_delay: f32,
@@ -58,7 +58,7 @@ fn flown(look: Voxel, f: Flight, slot: u32, clock: Clock) -> Voxel {
         return look;
     }
     let k = back_out((elapsed - f.delay) / max(f.duration, 1e-6), f.overshoot);
-    let position = mix(f.from, f.to, vec3(k));
+    let position = mix(f.from_position, f.to_position, vec3(k));
     let scale = mix(f.from_scale, f.to_scale, vec3(clamp(k, 0.0, 1.0)));
     let t = clamp((elapsed - f.color_delay) / max(f.color_duration, 1e-6), 0.0, 1.0);
     let rgba = round(mix(unpack4x8unorm(f.color_from), unpack4x8unorm(f.color_to), vec4(t)) * 255.0) / 255.0;
