@@ -29,8 +29,8 @@ struct Flight {
     end: f32,
     overshoot: f32,
     show: u32,
-    pad0: u32,
-    pad1: u32,
+    spare_a: u32,
+    spare_b: u32,
 }
 
 // The flight clock of the frame (`FlightClock` in src/transition.rs): seconds, the model's angle about y and the
@@ -39,7 +39,7 @@ struct Clock {
     time: f32,
     angle: f32,
     shown: f32,
-    pad: f32,
+    spare: f32,
 }
 
 // `Flight::show`: the visible count decides, shown throughout, shown until the end.
