@@ -9,9 +9,9 @@
 
 use std::time::Instant;
 
-use bevy::mesh::MeshTag;
 use bevy::prelude::*;
-use voxel_art::instancing::{VoxelPool, VoxelSlot};
+use rayon::prelude::*;
+use voxel_art::instancing::{GpuVoxels, VoxelPool};
 use voxel_art::model::{ModelEntry, ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::transition::ActiveTransition;
 use voxel_core::shapes::uv_sphere;
@@ -67,11 +67,20 @@ fn app_with(models: Vec<voxel_core::VoxelModel>) -> App {
 }
 
 /// Changes every voxel's colour (as a colour animation would).
-fn recolor_everything(time: Res<Time>, mut voxels: Query<(&VoxelSlot, &mut MeshTag)>) {
+fn recolor_everything(time: Res<Time>, pool: Res<VoxelPool>, mut looks: ResMut<GpuVoxels>) {
     let shift = (time.elapsed_secs() * 60.0) as u32;
-    voxels
-        .par_iter_mut()
-        .for_each(|(slot, mut tag)| tag.0 = slot.0.wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000);
+    let visible = pool.visible;
+    looks.pieces().for_each(|mut piece| {
+        for i in 0..piece.items.len().min(visible.saturating_sub(piece.start)) {
+            let color = ((piece.start + i) as u32).wrapping_mul(2_654_435_761).wrapping_add(shift) | 0xff00_0000;
+            piece.set(i, voxel_art::instancing::GpuVoxel { color, ..piece.items[i] });
+        }
+    });
+}
+
+/// Voxels in flight (or popping).
+fn flying(app: &App) -> usize {
+    app.world().resource::<VoxelPool>().slots.iter().filter(|s| s.flying).count()
 }
 
 fn measure(app: &mut App, warmup: usize, frames: usize) -> (f64, f64) {
@@ -133,12 +142,10 @@ fn main() {
         println!("voxels: cube {}", cube.len());
         let mut app = app_with(vec![sphere.clone(), cube]);
         app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
-        let tweening =
-            |app: &mut App| app.world_mut().query::<&voxel_art::transition::VoxelTween>().iter(app.world()).count();
         let (mean, median) = measure(&mut app, 12, 48);
         println!(
             "mid-morph ({} tweening at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame",
-            tweening(&mut app)
+            flying(&app)
         );
     }
     if wanted("repel") {
@@ -146,12 +153,7 @@ fn main() {
         let mut app = app_with(vec![sphere]);
         app.add_systems(First, circling_cursor);
         let (mean, median) = measure(&mut app, 10, 300);
-        let displaced = app
-            .world_mut()
-            .query::<&voxel_art::instancing::RepelOffset>()
-            .iter(app.world())
-            .filter(|r| !r.is_rest())
-            .count();
+        let displaced = app.world().resource::<VoxelPool>().slots.iter().filter(|s| !s.repel.is_rest()).count();
         println!(
             "repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame"
         );
@@ -273,8 +275,7 @@ fn current_placed(app: &mut App) -> bool {
     let Some(entry) = library.current_entry() else { return false };
     let fresh = entry.voxels_generation == Some(latest)
         && entry.voxels.as_ref().map(|h| h.id()) == app.world().resource::<VoxelPool>().shown;
-    let mut tweens = app.world_mut().query::<&voxel_art::transition::VoxelTween>();
-    fresh && tweens.iter(app.world()).next().is_none() && app.world().resource::<ActiveTransition>().running.is_none()
+    fresh && flying(app) == 0 && app.world().resource::<ActiveTransition>().running.is_none()
 }
 
 /// Steps the app (a quarter of a millisecond apart, as frames waiting on the GPU would leave the cores to the

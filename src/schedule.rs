@@ -138,8 +138,10 @@ pub enum InstancingSystems {
     Grow,
     /// The chunk meshes follow the voxel shapes (`PostUpdate`, as the next three).
     Meshes,
-    /// The changed voxels go into the buffer's mirror.
+    /// The chunks of looks changed this frame become its upload ranges.
     Gather,
+    /// The GPU buffer follows the pool's size.
+    Buffer,
     /// The detail follows the voxels' width on screen.
     Detail,
     /// The chunk entities follow the pool.
@@ -180,6 +182,10 @@ pub enum StyleSystems {
     Give,
     /// Bubbles burst.
     Burst,
+    /// The falling voxels take the pile's places (in `AppSystems::Sync`, as the next).
+    Pile,
+    /// Voxels at home are placed (repel springs, bubble wobble).
+    Place,
 }
 
 /// The stage's systems (in `AppSystems::Present`).
@@ -289,10 +295,12 @@ impl Plugin for SchedulePlugin {
             Update,
             (
                 (StyleSystems::Give, StyleSystems::Burst).chain().after(TransitionSystems::Recolor),
-                AnimationSystems::Follow.after(TransitionSystems::Recolor),
+                // Both write the pool's slots.
+                AnimationSystems::Follow.after(StyleSystems::Burst),
             )
                 .in_set(A::Animate),
         );
+        app.configure_sets(Update, (StyleSystems::Pile, StyleSystems::Place).chain().in_set(A::Sync));
         app.configure_sets(Update, PreviewSystems::Pick.in_set(A::Pointer));
         app.configure_sets(
             Update,
@@ -308,7 +316,7 @@ impl Plugin for SchedulePlugin {
         app.configure_sets(FixedUpdate, StyleSystems::Fall.in_set(A::Simulate));
         app.configure_sets(
             PostUpdate,
-            (I::Meshes, I::Gather, I::Detail, I::Chunks)
+            (I::Meshes, I::Gather, I::Buffer, I::Detail, I::Chunks)
                 .chain()
                 .after(TransformSystems::Propagate)
                 .after(CameraUpdateSystems)

@@ -5,22 +5,24 @@
 //! The two model-level animations, the spin and the visible count, are bevy_tweening `TweenAnim`s on
 //! [`ActiveTransition`]. The per-voxel flights are not: bevy_tweening 0.16 steps every `TweenAnim` in one
 //! exclusive, single-threaded system through boxed closures, measured at 14.6 ms a frame for 100k per-voxel
-//! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores). So
-//! each flying voxel carries a [`VoxelTween`], stepped by one `par_iter_mut` system right after the model-level
-//! tweens, which composes the spin into every voxel's transform: voxels and the cloud's frame always agree.
+//! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores).
+//! Voxels are pool slots, not entities: a morph writes one [`VoxelTween`] per slot ([`VoxelTweens`]) and the
+//! look where it lands, once; the GPU draws the flight from the tween at the frame's clock (the spin angle and
+//! the visible count in it), so the CPU's part of a frame mid-morph is the clock and landing the voxels whose
+//! flights are over.
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 use std::time::Duration;
 
-use bevy::ecs::system::ParallelCommands;
-use bevy::math::Mat3A;
-use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
+use rayon::prelude::*;
 
 use crate::instancing::{
-    PLACEHOLDER_COUNT, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelQuery, VoxelSlot, VoxelTarget, drawn_count,
-    pack_color, placeholder_targets, targets_for, unpack_color, voxel_global, voxel_transform,
+    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Slot, Turn, TweenShow, VOXELS_PER_CHUNK, VoxelCloud,
+    VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens, apply_targets, drawn_count, pack_color,
+    placeholder_targets, targets_for,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::rng::Rng;
@@ -102,94 +104,6 @@ pub enum Assignment {
     Height,
     /// The voxelizer's own cell order (x-major): visibly noisier paths.
     Grid,
-}
-
-/// Back-out easing with overshoot `s` (the article's `back.out(3)`; Bevy's `BackOut` uses 1.70158).
-pub fn back_out(t: f32, s: f32) -> f32 {
-    let u = t.clamp(0.0, 1.0) - 1.0;
-    1.0 + (s + 1.0) * u * u * u + s * u * u
-}
-
-/// One voxel's flight: position (back-out), colour (after a delay), visibility (the count tween).
-#[derive(Component, Clone, Debug, PartialEq)]
-
-pub struct VoxelTween {
-    /// Start and end position (cloud space).
-    pub from: Vec3,
-    /// End position.
-    pub to: Vec3,
-    /// Start and end box scale.
-    pub from_scale: Vec3,
-    /// End scale.
-    pub to_scale: Vec3,
-    /// Seconds before it moves.
-    pub delay: f32,
-    /// Seconds the move takes.
-    pub duration: f32,
-    /// Start colour.
-    pub color_from: [u8; 4],
-    /// End colour.
-    pub color_to: [u8; 4],
-    /// Seconds before the colour changes.
-    pub color_delay: f32,
-    /// Seconds the colour change takes.
-    pub color_duration: f32,
-    /// What decides whether it shows while it tweens.
-    pub show: TweenShow,
-    /// Seconds since the transition started.
-    pub elapsed: f32,
-    /// Back-out overshoot.
-    pub overshoot: f32,
-    /// The voxel follows the cloud's spin until then.
-    pub spin_end: f32,
-}
-
-/// What decides whether a tweening voxel shows.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TweenShow {
-    /// A morph's voxel: the visible-count tween (its slot below the count), until `end` seconds (0 for a
-    /// voxel that shows throughout).
-    Count {
-        /// Seconds until which the count decides.
-        end: f32,
-    },
-    /// A voxel popping in on a pose's new cell: shown throughout.
-    Shown,
-    /// A voxel popping out of a pose's emptied cell: shown until the tween ends, hidden then.
-    UntilEnd,
-}
-
-impl VoxelTween {
-    /// When every part of the tween is over.
-    pub fn end(&self) -> f32 {
-        let count_end = if let TweenShow::Count { end } = self.show { end } else { 0.0 };
-        (self.delay + self.duration).max(self.spin_end).max(self.color_delay + self.color_duration).max(count_end)
-    }
-
-    /// Whether it shows now, given the visible-count tween's `shown` slots.
-    fn shows(&self, slot: u32, shown: f32) -> bool {
-        match self.show {
-            TweenShow::Count { .. } => (slot as f32) < shown,
-            TweenShow::Shown => true,
-            TweenShow::UntilEnd => self.elapsed < self.end(),
-        }
-    }
-
-    /// Position and scale at the tween's current time.
-    pub fn transform(&self) -> (Vec3, Vec3) {
-        let t = ((self.elapsed - self.delay) / self.duration.max(1e-6)).clamp(0.0, 1.0);
-        let k = back_out(t, self.overshoot);
-        (self.from.lerp(self.to, k), self.from_scale.lerp(self.to_scale, k.clamp(0.0, 1.0)))
-    }
-
-    /// Colour at the tween's current time.
-    pub fn color(&self) -> [u8; 4] {
-        let t = ((self.elapsed - self.color_delay) / self.color_duration.max(1e-6)).clamp(0.0, 1.0);
-        std::array::from_fn(|c| {
-            (f32::from(self.color_from[c]) + (f32::from(self.color_to[c]) - f32::from(self.color_from[c])) * t).round()
-                as u8
-        })
-    }
 }
 
 /// Sent when a transition begins (the voxels take off for `model`'s cells).
@@ -306,21 +220,36 @@ fn morton(p: Vec3, lo: Vec3, size: f32) -> u32 {
     spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2
 }
 
-/// Sorts targets per the assignment so slot i of the old layout flies to a nearby rank of the new one.
+/// Sorts targets per the assignment so slot i of the old layout flies to a nearby rank of the new one (keys
+/// computed once per target, sorted in parallel; equal keys keep their order).
 pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
     match assignment {
         Assignment::Grid => {}
-        Assignment::Height => targets.sort_by(|a, b| {
+        Assignment::Height => {
             let angle = |p: Vec3| p.z.atan2(p.x);
-            a.position.y.total_cmp(&b.position.y).then(angle(a.position).total_cmp(&angle(b.position)))
-        }),
+            sort_by_key(targets, |t| (ordered(t.position.y), ordered(angle(t.position))));
+        }
         Assignment::Morton => {
             let lo = targets.iter().fold(Vec3::splat(f32::MAX), |m, t| m.min(t.position));
             let hi = targets.iter().fold(Vec3::splat(f32::MIN), |m, t| m.max(t.position));
             let size = (hi - lo).max_element().max(1e-6);
-            targets.sort_by_key(|t| morton(t.position, lo, size));
+            sort_by_key(targets, |t| morton(t.position, lo, size));
         }
     }
+}
+
+/// A float's bits in an order that agrees with `f32::total_cmp`.
+fn ordered(f: f32) -> u32 {
+    let bits = f.to_bits();
+    if bits >> 31 == 1 { !bits } else { bits | 1 << 31 }
+}
+
+/// Sorts `targets` by `key`, stably.
+fn sort_by_key<K: Ord + Send>(targets: &mut [VoxelTarget], key: impl Fn(&VoxelTarget) -> K + Sync) {
+    let mut keyed: Vec<(K, u32)> = targets.par_iter().enumerate().map(|(i, t)| (key(t), i as u32)).collect();
+    keyed.par_sort_unstable();
+    let sorted: Vec<VoxelTarget> = keyed.iter().map(|(_, i)| targets[*i as usize]).collect();
+    targets.copy_from_slice(&sorted);
 }
 
 /// The layout a model is shown with (ordered per the assignment).
@@ -330,20 +259,68 @@ pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &Tr
     targets
 }
 
-/// The voxel state a slot is in now: (position, scale, colour, visible).
-type SlotState = (Vec3, Vec3, [u8; 4], bool);
+/// What a layout depends on besides its model's contents: the model, the box size, hollow, the assignment.
+type LayoutKey = (AssetId<VoxelModelAsset>, u32, bool, Assignment);
 
-/// Plans the tween of slot `i` from its current state to the new layout.
+/// The last few layouts made (a morph back to a model, a recolour and the animation's map reuse them), each
+/// forgotten when its model changes.
+#[derive(Resource, Debug, Default)]
+pub struct Layouts(Vec<(LayoutKey, Arc<[VoxelTarget]>)>);
+
+impl Layouts {
+    /// Layouts kept.
+    const KEPT: usize = 3;
+
+    /// Model `id`'s layout (`model`) with these settings, made if it is not kept.
+    pub fn of(
+        &mut self,
+        id: AssetId<VoxelModelAsset>,
+        model: &VoxelModelAsset,
+        settings: &VoxelSettings,
+        transition: &TransitionSettings,
+    ) -> Arc<[VoxelTarget]> {
+        let key = (id, settings.box_size.to_bits(), settings.hollow, transition.assignment);
+        if let Some((_, kept)) = self.0.iter().find(|(k, _)| *k == key) {
+            return kept.clone();
+        }
+        let made: Arc<[VoxelTarget]> = layout(model, settings, transition).into();
+        if self.0.len() == Self::KEPT {
+            self.0.remove(0);
+        }
+        self.0.push((key, made.clone()));
+        made
+    }
+
+    /// Forgets the layouts of the models that changed or went.
+    fn forget(&mut self, events: &mut MessageReader<AssetEvent<VoxelModelAsset>>) {
+        for event in events.read() {
+            if let AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } = event {
+                self.forget_model(*id);
+            }
+        }
+    }
+
+    /// Forgets model `id`'s layouts (its colours changed this frame: its asset event comes later).
+    fn forget_model(&mut self, id: AssetId<VoxelModelAsset>) {
+        self.0.retain(|((model, ..), _)| *model != id);
+    }
+}
+
+/// The voxel state a slot is in now: (position in the cloud's frame, scale, colour, visible).
+type SlotState = (Vec3, Vec3, u32, bool);
+
+/// Plans the tween of slot `i` from its current state to the new layout (random draws from `rng`), starting
+/// at clock time `start`.
 pub fn plan(
     i: usize,
     now: SlotState,
-    old_count: usize,
     old: &[SlotState],
     new: &[VoxelTarget],
     settings: &TransitionSettings,
+    start: f32,
     rng: &mut Rng,
 ) -> Option<(VoxelTween, VoxelHome)> {
-    let new_count = new.len();
+    let (old_count, new_count) = (old.len(), new.len());
     if i >= old_count.max(new_count) || new.is_empty() {
         return None;
     }
@@ -377,15 +354,76 @@ pub fn plan(
         delay,
         duration,
         color_from,
-        color_to,
+        color_to: pack_color(color_to),
         color_delay,
         color_duration: settings.color_duration,
-        show: TweenShow::Count { end: count_end },
-        elapsed: 0.0,
+        start,
         overshoot: settings.overshoot,
-        spin_end: settings.spin_duration,
-    };
+        show: TweenShow::Count as u32,
+        ..Default::default()
+    }
+    .ending(settings.spin_duration.max(count_end));
     Some((tween, home))
+}
+
+/// Everything a morph's flights are planned from.
+struct Flights<'a> {
+    /// Where the voxels that show now are (slot order, up to the last that shows).
+    old: &'a [SlotState],
+    /// The new layout.
+    new: &'a [VoxelTarget],
+    /// The timings.
+    settings: &'a TransitionSettings,
+    /// The clock time the morph starts.
+    start: f32,
+    /// The model's turn once the spin is over.
+    landed: Turn,
+    /// The morph's random seed (each chunk of slots draws from its own generator).
+    seed: u64,
+}
+
+impl Flights<'_> {
+    /// Plans every slot's flight from `now` (a chunk of slots to a task): its tween, its home and the look it
+    /// lands on; a slot with no part in the morph hides. Returns when the last voxel lands.
+    fn plan_all(
+        &self,
+        pool: &mut VoxelPool,
+        now: &[SlotState],
+        looks: &mut GpuVoxels,
+        tweens: &mut VoxelTweens,
+    ) -> f32 {
+        let slots = pool.slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(now.par_chunks(VOXELS_PER_CHUNK));
+        slots
+            .zip(looks.pieces())
+            .zip(tweens.pieces())
+            .enumerate()
+            .map(|(c, (((slots, now), mut looks), (mut flights, in_air)))| {
+                let mut rng = Rng::new(self.seed ^ (c as u64).wrapping_mul(0x2545_f491_4f6c_dd1d));
+                let mut end = 0.0f32;
+                for (i, (slot, state)) in slots.iter_mut().zip(now).enumerate() {
+                    let index = looks.start + i;
+                    // The flight starts where the voxel is now, repel displacement included: that is spent.
+                    slot.repel = RepelOffset::default();
+                    match plan(index, *state, self.old, self.new, self.settings, self.start, &mut rng) {
+                        Some((tween, home)) => {
+                            end = end.max(tween.end);
+                            *slot = Slot { home, flying: true, ..*slot };
+                            *in_air = true;
+                            let look = self.landed.place(tween.to, tween.to_scale, tween.color_to);
+                            looks.set(i, if index < self.new.len() { look } else { look.hidden() });
+                            flights.set(i, tween);
+                        }
+                        None => {
+                            slot.flying = false;
+                            let hidden = looks.items[i].hidden();
+                            looks.set(i, hidden);
+                        }
+                    }
+                }
+                end
+            })
+            .reduce(|| 0.0, f32::max)
+    }
 }
 
 /// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
@@ -394,6 +432,9 @@ pub fn plan(
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
+    mut looks: ResMut<GpuVoxels>,
+    mut tweens: ResMut<VoxelTweens>,
+    clock: Res<GpuClock>,
     mut active: ResMut<ActiveTransition>,
     mut started: MessageWriter<TransitionStarted>,
     mut reassemble: MessageReader<Reassemble>,
@@ -402,48 +443,50 @@ fn start(
     settings: Res<VoxelSettings>,
     transition: Res<TransitionSettings>,
     drag: Res<SettingDrag>,
-    voxels: Query<(Entity, &VoxelSlot, &Transform, &MeshTag, &Visibility), Without<VoxelCloud>>,
     model_tweens: Query<Entity, With<ModelTween>>,
-    mut last_look: Local<Option<(f32, bool)>>,
+    (mut layouts, mut changed, mut recolored): (
+        ResMut<Layouts>,
+        MessageReader<AssetEvent<VoxelModelAsset>>,
+        MessageReader<Recolored>,
+    ),
+    (mut last_look, mut now): (Local<Option<(f32, bool)>>, Local<Vec<SlotState>>),
 ) {
+    layouts.forget(&mut changed);
+    recolored.read().for_each(|r| layouts.forget_model(r.model));
     let restart = reassemble.read().count() > 0;
     let Some((id, model)) = library.current_ready(&models) else { return };
     // A new box size or the hollow switch lays the model out again.
     let look = (settings.box_size, settings.hollow);
     let relook = last_look.is_some_and(|l| l != look);
-    if (pool.shown == Some(id) && !relook && !restart) || voxels.iter().len() < drawn_count(model, settings.hollow) {
+    if (pool.shown == Some(id) && !relook && !restart) || pool.slots.len() < drawn_count(model, settings.hollow) {
         return;
     }
     *last_look = Some(look);
     let transition = if drag.0 { transition.instant() } else { transition.clone() };
-    let new = layout(model, &settings, &transition);
-    // Voxel transforms are world space; tweens run in the cloud's (model) space.
-    let unturn = active.turn().inverse();
-    let mut slots: Vec<(Entity, u32, SlotState)> = voxels
-        .iter()
-        .map(|(e, s, t, tag, v)| {
-            (e, s.0, (unturn * t.translation, t.scale, unpack_color(tag.0), *v != Visibility::Hidden))
-        })
-        .collect();
-    slots.sort_unstable_by_key(|s| s.1);
+    let new = layouts.of(id, model, &settings, &transition);
+    // Where every voxel is drawn now (in flight or not), in the cloud's frame, where tweens run.
+    let turn = Turn::new(active.turn());
+    tweens.drawn_into(
+        &pool,
+        &looks.items,
+        &clock,
+        |v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()),
+        &mut now,
+    );
     // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
     // joining one not yet shown, is picked up where it is).
-    let old_count = slots.iter().filter(|s| s.2.3).map(|s| s.1 as usize + 1).max().unwrap_or(0);
-    let old: Vec<SlotState> = slots.iter().take(old_count).map(|s| s.2).collect();
-    let mut rng = Rng::new(active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17));
-    let mut end = 0.0f32;
-    for (entity, slot, now) in &slots {
-        match plan(*slot as usize, *now, old_count, &old, &new, &transition, &mut rng) {
-            Some((tween, home)) => {
-                end = end.max(tween.end());
-                // The flight starts where the voxel is now, repel displacement included: that is spent.
-                commands.entity(*entity).insert((tween, home, RepelOffset::default()));
-            }
-            None => {
-                commands.entity(*entity).remove::<VoxelTween>().insert((Visibility::Hidden, RepelOffset::default()));
-            }
-        }
-    }
+    let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
+    let flights = Flights {
+        old: &now[..old_count],
+        new: &new,
+        settings: &transition,
+        start: clock.time,
+        // Each voxel lands on its look, in the model turned by the whole spin.
+        landed: Turn::new(Quat::from_rotation_y(active.angle + transition.spin_angle)),
+        seed: active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17),
+    };
+    tweens.reserve(pool.slots.len());
+    let end = flights.plan_all(&mut pool, &now, &mut looks, &mut tweens);
     // The model-level tweens: the spin and the visible count (the last transition's are replaced).
     for tween in &model_tweens {
         commands.entity(tween).despawn();
@@ -461,67 +504,27 @@ fn start(
     started.write(TransitionStarted { model: id });
 }
 
-/// The voxels in flight, with everything the step writes.
-type TweeningVoxels<'w, 's> = Query<
-    'w,
-    's,
-    (
-        Entity,
-        &'static VoxelSlot,
-        &'static mut VoxelTween,
-        &'static mut Transform,
-        &'static mut GlobalTransform,
-        &'static mut MeshTag,
-        &'static mut Visibility,
-    ),
-    Without<VoxelCloud>,
->;
-
-/// Steps every voxel tween in parallel (after the model-level tweens: the spin and the visible count are this
-/// frame's); finished ones snap to their end and are removed.
+/// Moves the flight clock on (after the model-level tweens: the spin and the visible count are this frame's)
+/// and lands the voxels whose flights are over; the GPU draws the rest from their tweens.
 fn step(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
     mut active: ResMut<ActiveTransition>,
     mut finished: MessageWriter<TransitionFinished>,
-    mut tweens: TweeningVoxels,
+    mut pool: ResMut<VoxelPool>,
+    mut tweens: ResMut<VoxelTweens>,
+    mut clock: ResMut<GpuClock>,
     mut cloud: Query<&mut Transform, With<VoxelCloud>>,
-    par_commands: ParallelCommands,
 ) {
     let dt = time.delta_secs() * settings.speed;
     if active.running.is_some() {
         active.elapsed += dt;
     }
-    let rotation = active.turn();
-    let turn = Mat3A::from_quat(rotation);
-    let shown = active.shown;
+    *clock = GpuClock::new(clock.time + dt, active.angle, active.shown);
     if let Ok(mut cloud) = cloud.single_mut() {
-        cloud.rotation = rotation;
+        cloud.rotation = active.turn();
     }
-    tweens.par_iter_mut().for_each(|(entity, slot, mut tween, mut transform, mut global, mut tag, mut visibility)| {
-        tween.elapsed += dt;
-        let (position, scale) = tween.transform();
-        // Voxels have no parent, so their global transform is their transform: write both here and keep the
-        // Transform write out of change detection, which spares Bevy's propagation pass over 100k moving
-        // voxels (4 ms a frame on two cores). The renderer picks up the changed GlobalTransform.
-        let local = voxel_transform(rotation, position, scale);
-        *transform.bypass_change_detection() = local;
-        *global = voxel_global(turn, scale, local.translation);
-        // The colour only moves inside its short window (and lands exactly at its end).
-        if tween.elapsed >= tween.color_delay {
-            let color = pack_color(tween.color());
-            if tag.0 != color {
-                tag.0 = color;
-            }
-        }
-        let visible = tween.shows(slot.0, shown);
-        visibility.set_if_neq(if visible { Visibility::Inherited } else { Visibility::Hidden });
-        if tween.elapsed >= tween.end() {
-            par_commands.command_scope(|mut commands| {
-                commands.entity(entity).remove::<VoxelTween>();
-            });
-        }
-    });
+    tweens.land(&mut pool, clock.time);
     if let Some((model, end)) = active.running
         && active.elapsed >= end
     {
@@ -531,37 +534,31 @@ fn step(
 }
 
 /// Placeholder boxes bob gently while nothing is voxelized yet.
-fn float_placeholder(
-    time: Res<Time>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<(&VoxelSlot, &mut Transform), Without<VoxelCloud>>,
-) {
+fn float_placeholder(time: Res<Time>, pool: Res<VoxelPool>, mut looks: ResMut<GpuVoxels>) {
     if pool.shown.is_some() {
         return;
     }
     let t = time.elapsed_secs();
-    for (slot, mut transform) in &mut voxels {
-        let phase = slot.0 as f32 * 0.7;
-        transform.translation.y += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+    for slot in 0..pool.slots.len().min(PLACEHOLDER_COUNT) {
+        let mut look = looks.items[slot];
+        let phase = slot as f32 * 0.7;
+        look.translation[1] += (t * 1.5 + phase).cos() * 0.12 * time.delta_secs();
+        looks.set(slot, look);
     }
 }
 
-/// The placeholder floats until the first model arrives; it is laid out once the pool has grown.
-fn placeholder(mut pool: ResMut<VoxelPool>, mut voxels: VoxelQuery, mut done: Local<bool>) {
-    if *done || pool.shown.is_some() || voxels.iter().len() < PLACEHOLDER_COUNT {
+/// The placeholder floats until the first model arrives; it is laid out once.
+fn placeholder(mut pool: ResMut<VoxelPool>, mut looks: ResMut<GpuVoxels>, mut done: Local<bool>) {
+    if *done || pool.shown.is_some() || pool.slots.len() < PLACEHOLDER_COUNT {
         return;
     }
-    crate::instancing::apply_targets(
-        &mut pool,
-        &placeholder_targets(PLACEHOLDER_COUNT, 0x5eed),
-        Quat::IDENTITY,
-        &mut voxels,
-    );
+    let targets = placeholder_targets(PLACEHOLDER_COUNT, 0x5eed);
+    apply_targets(&mut pool, &mut looks, &targets, Turn::new(Quat::IDENTITY));
     *done = true;
 }
 
 /// Gives the voxels of the model on screen its new colours after a recolour ([`Recolored`]): slot i keeps cell i
-/// of the layout (as the morph laid them) and takes that cell's colour; only tags that change are written, so
+/// of the layout (as the morph laid them) and takes that cell's colour; only looks that change are written, so
 /// only their chunks are uploaded. During a morph, once it is over (its colours were planned from the old ones).
 fn show_recolored(
     mut recolored: MessageReader<Recolored>,
@@ -569,26 +566,30 @@ fn show_recolored(
     models: Res<Assets<VoxelModelAsset>>,
     (settings, transition, active): (Res<VoxelSettings>, Res<TransitionSettings>, Res<ActiveTransition>),
     pool: Res<VoxelPool>,
-    mut tags: Query<&mut MeshTag>,
+    mut looks: ResMut<GpuVoxels>,
+    mut layouts: ResMut<Layouts>,
 ) {
-    if let Some(r) = recolored.read().filter(|r| pool.shown == Some(r.model)).last() {
-        *pending = Some(r.model);
+    for r in recolored.read() {
+        layouts.forget_model(r.model);
+        if pool.shown == Some(r.model) {
+            *pending = Some(r.model);
+        }
     }
     if active.running.is_some() {
         return;
     }
     let Some(id) = pending.take().filter(|id| pool.shown == Some(*id)) else { return };
     let Some(model) = models.get(id) else { return };
-    for (target, &entity) in layout(model, &settings, &transition).iter().zip(&pool.slots) {
-        if let Ok(mut tag) = tags.get_mut(entity) {
-            tag.set_if_neq(MeshTag(pack_color(target.color)));
-        }
+    for (slot, target) in layouts.of(id, model, &settings, &transition).iter().enumerate().take(pool.slots.len()) {
+        let look = GpuVoxel { color: pack_color(target.color), ..looks.items[slot] };
+        looks.set(slot, look);
     }
 }
 
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
+    app.init_resource::<Layouts>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
@@ -611,18 +612,6 @@ pub(super) fn plugin(app: &mut App) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn back_out_three_overshoots_and_lands_on_one() {
-        assert_eq!(back_out(0.0, 3.0), 0.0);
-        assert_eq!(back_out(1.0, 3.0), 1.0);
-        let peak = (1..100).map(|i| back_out(i as f32 / 100.0, 3.0)).fold(0.0f32, f32::max);
-        assert!(peak > 1.2, "back.out(3) peaks at {peak}");
-        // Stronger than the standard 1.70158.
-        let standard = (1..100).map(|i| back_out(i as f32 / 100.0, 1.70158)).fold(0.0f32, f32::max);
-        assert!(peak > standard + 0.05);
-        assert!((standard - 1.1).abs() < 0.01, "the standard back-out overshoots about 10 %: {standard}");
-    }
 
     #[test]
     fn orders_put_layers_and_neighbourhoods_together() {

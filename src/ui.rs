@@ -230,7 +230,7 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         ));
         ui.label(format!("voxelized in {:.1} ms, {}", entry.voxelize_ms, megabytes(model.memory_bytes())));
     }
-    ui.label(format!("voxel pool: {} entities", pool.slots.len()));
+    ui.label(format!("voxel pool: {} slots", pool.slots.len()));
 }
 
 /// A byte count for the panel, e.g. "1.4 MB of voxel data".

@@ -3,17 +3,9 @@
 // (the chunk's index is its MeshTag, the box's is the vertex index over the vertices of one box). Bit 31 of the
 // tag says the chunk draws the low detail mesh: three faces (+x, +y, +z, four vertices each), each turned to the
 // side of the box that faces the viewer.
+// A voxel in flight (a morph, a pop) is drawn from its flight at the frame's clock (voxel_flight.wgsl).
 #import bevy_pbr::{mesh_bindings::mesh, mesh_functions, mesh_view_bindings::view, view_transformations::position_world_to_clip}
-
-// One voxel (32 bytes, `GpuVoxel` in src/instancing/gpu.rs). Voxels only turn about y: the box's x axis in the
-// xz plane (width × (cos, −sin)), its height and its depth place it; a hidden voxel has no size.
-struct Voxel {
-    translation: vec3<f32>,
-    color: u32,
-    x_axis: vec2<f32>,
-    scale_y: f32,
-    scale_z: f32,
-}
+#import "shaders/voxel_flight.wgsl"::{Voxel, Flight, Clock, flown}
 
 struct ChunkLayout {
     vertices_per_voxel: u32,
@@ -23,6 +15,8 @@ struct ChunkLayout {
 
 @group(#{MATERIAL_BIND_GROUP}) @binding(100) var<storage, read> voxels: array<Voxel>;
 @group(#{MATERIAL_BIND_GROUP}) @binding(101) var<uniform> chunk_layout: ChunkLayout;
+@group(#{MATERIAL_BIND_GROUP}) @binding(102) var<storage, read> flights: array<Flight>;
+@group(#{MATERIAL_BIND_GROUP}) @binding(103) var<storage, read> clock: Clock;
 
 // A vertex of a chunk's mesh: its voxel, and which face of the low detail box to turn over (0: none, 1..3: the
 // x, y or z face).
@@ -54,7 +48,11 @@ fn box_vertex(instance_index: u32, vertex_index: u32) -> BoxVertex {
     let tag = mesh_functions::get_tag(instance_index);
     let low = (tag >> 31u) != 0u;
     let per_voxel = select(chunk_layout.vertices_per_voxel, chunk_layout.low_vertices_per_voxel, low);
-    let voxel = voxels[(tag & 0x7fffffffu) * chunk_layout.voxels_per_chunk + local / per_voxel];
+    let slot = (tag & 0x7fffffffu) * chunk_layout.voxels_per_chunk + local / per_voxel;
+    var voxel = voxels[slot];
+    if slot < arrayLength(&flights) {
+        voxel = flown(voxel, flights[slot], slot, clock);
+    }
     var flip = 0u;
     if low {
         let face = (local % per_voxel) / 4u;

@@ -1,26 +1,28 @@
 //! The voxels follow the pose: each pool slot of an animated model shows one cell, so a cell that stays filled
-//! keeps its voxel (entity) and only takes the new pose's colour, a cell that empties pops out (a short scale
-//! tween to nothing, then its slot is [`Vacant`]) and a cell that fills pops in on a free slot. A morph lays the
+//! keeps its voxel (slot) and only takes the new pose's colour, a cell that empties pops out (a short scale
+//! tween to nothing, then its slot is vacant) and a cell that fills pops in on a free slot. A morph lays the
 //! model out anew (the transition's slot order), and the map is rebuilt from that layout; poses placed while a
 //! morph runs or while the pool is held (the falling style) are applied once it is over.
 
 use std::collections::HashMap;
 
-use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 
 use crate::instancing::{
-    RepelOffset, Vacant, VoxelCloud, VoxelHome, VoxelPool, VoxelTarget, grow_pool, pack_color, targets_for,
-    unpack_color, voxel_transform,
+    GpuClock, GpuVoxel, GpuVoxels, Slot, Turn, TweenShow, VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens,
+    grow_pool, pack_color, targets_for,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
-use crate::transition::{ActiveTransition, TransitionSettings, TransitionStarted, TweenShow, VoxelTween, layout};
+use crate::transition::{ActiveTransition, Layouts, TransitionSettings, TransitionStarted};
 
 use super::PosePlaced;
 
 /// Seconds a voxel takes to pop in or out.
 pub const POP_SECONDS: f32 = 0.15;
+
+/// The size a voxel pops in from, as a fraction of its box.
+const POP_SPECK: f32 = 1e-3;
 
 /// A cell, by its centre's bits (centres of one grid are computed alike, so equal cells have equal bits).
 type CellKey = [u32; 3];
@@ -59,29 +61,24 @@ impl CellSlots {
     }
 }
 
-/// A pop: the voxel stays on its cell and scales from `from` to `to`; popping out hides it at the end.
-fn pop(position: Vec3, from: Vec3, to: Vec3, color: [u8; 4], out: bool) -> VoxelTween {
+/// A pop starting at clock time `start`: the voxel stays on its cell and scales from `from` to `to`, shown
+/// throughout (its look says whether it shows once landed: not after popping out).
+fn pop(position: Vec3, from: Vec3, to: Vec3, color: u32, start: f32) -> VoxelTween {
     VoxelTween {
         from: position,
         to: position,
         from_scale: from,
         to_scale: to,
-        delay: 0.0,
         duration: POP_SECONDS,
         color_from: color,
         color_to: color,
-        color_delay: 0.0,
         color_duration: POP_SECONDS,
-        show: if out { TweenShow::UntilEnd } else { TweenShow::Shown },
-        elapsed: 0.0,
-        overshoot: 0.0,
-        spin_end: 0.0,
+        start,
+        show: TweenShow::Always as u32,
+        ..Default::default()
     }
+    .ending(0.0)
 }
-
-/// The voxels of the pool, as the follow pass reads them.
-type Slots<'w, 's> =
-    Query<'w, 's, (&'static VoxelHome, &'static Transform, &'static mut MeshTag, Has<VoxelTween>), Without<VoxelCloud>>;
 
 /// Whether `model` is the pose of an animated model of the library.
 fn is_pose(library: &ModelLibrary, model: AssetId<VoxelModelAsset>) -> bool {
@@ -90,7 +87,6 @@ fn is_pose(library: &ModelLibrary, model: AssetId<VoxelModelAsset>) -> bool {
 
 /// Rebuilds the map when a morph starts, then moves the voxels to each new pose once nothing else moves them.
 pub(super) fn follow(
-    mut commands: Commands,
     mut slots: ResMut<CellSlots>,
     mut started: MessageReader<TransitionStarted>,
     mut placed: MessageReader<PosePlaced>,
@@ -100,17 +96,17 @@ pub(super) fn follow(
     transition: Res<TransitionSettings>,
     active: Res<ActiveTransition>,
     mut pool: ResMut<VoxelPool>,
-    vacant: Query<Entity, With<Vacant>>,
-    mut voxels: Slots,
+    mut looks: ResMut<GpuVoxels>,
+    mut tweens: ResMut<VoxelTweens>,
+    clock: Res<GpuClock>,
+    mut layouts: ResMut<Layouts>,
 ) {
     if let Some(morph) = started.read().last() {
         // The morph gives every slot up to the new count a cell (slot i: cell i of the layout).
-        for entity in &vacant {
-            commands.entity(entity).remove::<Vacant>();
-        }
+        pool.slots.iter_mut().for_each(|s| s.vacant = false);
         *slots = CellSlots::default();
         if let Some(model) = models.get(morph.model).filter(|_| is_pose(&library, morph.model)) {
-            let laid_out = layout(model, &settings, &transition);
+            let laid_out = layouts.of(morph.model, model, &settings, &transition);
             slots.cells = laid_out.iter().enumerate().map(|(i, t)| (key(t.position), i as u32)).collect();
             slots.model = Some(morph.model);
         }
@@ -124,25 +120,24 @@ pub(super) fn follow(
         return;
     };
     let targets = targets_for(model, settings.box_size, settings.hollow);
-    let turn = active.turn();
+    let turn = Turn::new(active.turn());
     let CellSlots { cells, leaving, stale, .. } = &mut *slots;
     *stale = false;
     // A slot whose pop-out is over is free again.
-    leaving.retain(|slot, _| voxels.get(pool.slots[*slot as usize]).is_ok_and(|(.., tweening)| tweening));
+    leaving.retain(|slot, _| pool.slots[*slot as usize].flying);
     // Cells that stay keep their voxel and take the new colour; the others pop out.
     let mut wanted: HashMap<CellKey, &VoxelTarget> = targets.iter().map(|t| (key(t.position), t)).collect();
     cells.retain(|cell, slot| {
-        let entity = pool.slots[*slot as usize];
-        let Ok((home, transform, mut tag, _)) = voxels.get_mut(entity) else { return false };
+        let i = *slot as usize;
+        let look = looks.items[i];
         if let Some(target) = wanted.remove(cell) {
-            let color = pack_color(target.color);
-            if tag.0 != color {
-                tag.0 = color;
-            }
+            looks.set(i, GpuVoxel { color: pack_color(target.color), ..look });
             return true;
         }
-        let tween = pop(home.position, transform.scale, Vec3::ZERO, unpack_color(tag.0), true);
-        commands.entity(entity).insert((tween, Vacant));
+        let position = pool.slots[i].home.position;
+        tweens.fly(&mut pool, i, pop(position, look.scale(), Vec3::ZERO, look.color, clock.time));
+        looks.set(i, look.hidden());
+        pool.slots[i].vacant = true;
         leaving.insert(*slot, *cell);
         false
     });
@@ -156,31 +151,28 @@ pub(super) fn follow(
         let (slot, from) = match returning.remove(&cell) {
             Some(slot) => {
                 leaving.remove(&slot);
-                let scale = voxels.get(pool.slots[slot as usize]).map_or(Vec3::ZERO, |(_, t, ..)| t.scale);
-                (slot, scale)
+                (slot, looks.items[slot as usize].scale().max(target.scale * POP_SPECK))
             }
             None => {
                 while next_free < used.len() && used[next_free] {
                     next_free += 1;
                 }
                 if next_free == used.len() {
-                    grow_pool(&mut commands, &mut pool, used.len() + 1);
+                    grow_pool(&mut pool, &mut looks, used.len() + 1);
                     used.push(false);
                 }
-                (next_free as u32, Vec3::ZERO)
+                // A voxel of no size is a hidden one: a pop-in starts at a speck of its size, shown.
+                (next_free as u32, target.scale * POP_SPECK)
             }
         };
         used[slot as usize] = true;
         cells.insert(cell, slot);
         let VoxelTarget { position, scale, color, part } = *target;
-        commands.entity(pool.slots[slot as usize]).remove::<Vacant>().insert((
-            VoxelHome { position, scale, part },
-            RepelOffset::default(),
-            MeshTag(pack_color(color)),
-            voxel_transform(turn, position, from),
-            Visibility::Inherited,
-            pop(position, from, scale, color, false),
-        ));
+        let i = slot as usize;
+        pool.slots[i] = Slot { home: VoxelHome { position, scale, part }, ..Slot::default() };
+        let color = pack_color(color);
+        looks.set(i, turn.place(position, scale, color));
+        tweens.fly(&mut pool, i, pop(position, from, scale, color, clock.time));
     }
     pool.visible = used.iter().rposition(|u| *u).map_or(0, |last| last + 1);
 }

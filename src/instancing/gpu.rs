@@ -3,32 +3,31 @@
 //! mesh entities at a million voxels, batched into one instanced draw per view (the main pass and the light's
 //! shadow pass), instead of a mesh entity per voxel.
 //!
-//! Each frame, after transform propagation, the voxels whose transform, colour or visibility changed are
-//! gathered (in parallel) into a CPU mirror of the buffer; extraction writes only the chunks that changed
-//! with `RenderQueue::write_buffer`. The plugin owns the buffer: a `ShaderBuffer` asset created at its size
+//! The systems that move voxels write their looks into [`GpuVoxels`], the CPU mirror of the buffer, marking the
+//! chunks they change; after `Update` those chunks become the frame's upload ranges, and extraction writes only
+//! them with `RenderQueue::write_buffer`. The plugin owns the buffer: a `ShaderBuffer` asset created at its size
 //! without data (so Bevy never uploads it whole), replaced by a bigger one when the pool outgrows it.
 
 use bevy::camera::visibility::NoFrustumCulling;
+use bevy::ecs::component::Mutable;
 use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::RenderQueue;
 use bevy::render::storage::{GpuShaderBuffer, ShaderBuffer};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp};
-use bevy::utils::Parallel;
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 
+use super::flight::{GpuClock, VoxelTweens};
 use super::material::ChunkLayout;
-use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, VoxelSlot, mesh::chunk_mesh};
+use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, mesh::chunk_mesh};
 use crate::model::VoxelModelAsset;
 use crate::schedule::InstancingSystems;
 use crate::settings::VoxelSettings;
 
 /// Voxels (boxes) in one chunk's mesh.
 pub const VOXELS_PER_CHUNK: usize = 1024;
-
-/// The most voxels one storage binding holds (128 MiB of [`GpuVoxel`]s).
-pub const MAX_GPU_VOXELS: usize = (128 << 20) / size_of::<GpuVoxel>();
 
 /// One voxel as the vertex shaders read it (32 bytes). Voxels only ever turn about y (the model's spin), so
 /// the box's frame is its x axis in the xz plane (scale × (cos, −sin)), its height and its depth.
@@ -48,96 +47,180 @@ pub struct GpuVoxel {
 }
 
 impl GpuVoxel {
-    /// A voxel placed by `global` (a turn about y and a scale), coloured `color`; a hidden one has no size.
-    pub fn new(global: &GlobalTransform, color: u32, shown: bool) -> Self {
-        let affine = global.affine();
-        let m = affine.matrix3;
-        let translation = affine.translation.into();
-        if !shown {
-            return Self { translation, color, ..Self::default() };
-        }
-        Self { translation, color, x_axis: [m.x_axis.x, m.x_axis.z], scale_y: m.y_axis.y, scale_z: m.z_axis.length() }
+    /// The same voxel hidden (no size: it draws nothing), keeping its place and colour.
+    pub fn hidden(&self) -> Self {
+        Self { translation: self.translation, color: self.color, ..Self::default() }
     }
 
     /// Whether it draws anything.
     pub fn shows(&self) -> bool {
         self.scale_y != 0.0
     }
+
+    /// Its centre.
+    pub fn position(&self) -> Vec3 {
+        Vec3::from(self.translation)
+    }
+
+    /// Its box size (width, height, depth; zero when hidden).
+    pub fn scale(&self) -> Vec3 {
+        Vec3::new(Vec2::from(self.x_axis).length(), self.scale_y, self.scale_z)
+    }
 }
 
-/// The CPU mirror of the voxel buffer and what changed in it this frame.
-#[derive(Resource, Debug, Default)]
-pub struct GpuVoxels {
-    /// The voxels by pool slot (as long as the buffer holds).
-    pub voxels: Vec<GpuVoxel>,
-    /// Voxels that show, per chunk (a chunk with none is not drawn).
-    shown: Vec<u32>,
-    /// Chunks changed this frame (each once), and a flag per chunk.
-    dirty: Vec<u32>,
-    dirty_flag: Vec<bool>,
+/// What a storage buffer of the voxel material holds, one per pool slot.
+pub trait Record: Pod + PartialEq + Default + Send + Sync {
+    /// A number per record whose greatest in a chunk the chunk keeps (see [`Mirror::chunk_weight`]).
+    fn weight(&self) -> f32;
+    /// Points the material at `buffer` as this record's binding.
+    fn bind(material: &mut VoxelMaterial, buffer: Handle<ShaderBuffer>);
+}
+
+impl Record for GpuVoxel {
+    /// 1 when it shows: a chunk of weight 0 has nothing to draw.
+    fn weight(&self) -> f32 {
+        f32::from(u8::from(self.shows()))
+    }
+
+    fn bind(material: &mut VoxelMaterial, buffer: Handle<ShaderBuffer>) {
+        material.extension.voxels = buffer;
+    }
+}
+
+/// The CPU mirror of a storage buffer of records by pool slot (whole chunks), with the chunks changed since the
+/// last gather; the plugin owns the GPU buffer.
+#[derive(Debug, Default)]
+pub struct Mirror<T> {
+    /// The records by pool slot (as long as the buffer holds).
+    pub items: Vec<T>,
+    /// A flag per chunk: changed since the last gather.
+    dirty: Vec<bool>,
+    /// The greatest record weight per chunk, as of the last gather.
+    weights: Vec<f32>,
+    /// Ranges of records (start, end) the last gather found changed: this frame's uploads.
+    ranges: Vec<(usize, usize)>,
     /// The GPU buffer (`None` until the pool has a voxel).
     pub buffer: Option<Handle<ShaderBuffer>>,
+    /// Records the GPU buffer holds.
+    buffer_len: usize,
     /// The buffer is new this frame: all of it is uploaded.
     pub whole: bool,
 }
 
-impl GpuVoxels {
-    /// Ranges of voxels (start, end) to upload this frame, adjacent chunks merged.
-    pub fn dirty_ranges(&self) -> Vec<(usize, usize)> {
-        let mut chunks = self.dirty.clone();
-        chunks.sort_unstable();
-        let mut ranges: Vec<(usize, usize)> = Vec::new();
-        for c in chunks {
-            let (start, end) = (c as usize * VOXELS_PER_CHUNK, (c as usize + 1) * VOXELS_PER_CHUNK);
-            match ranges.last_mut() {
+/// One chunk of a mirror handed to one task: its records, its changed flag and its weight.
+pub struct Piece<'a, T> {
+    /// The slot of its first record.
+    pub start: usize,
+    /// Its records.
+    pub items: &'a mut [T],
+    dirty: &'a mut bool,
+    weight: &'a mut f32,
+}
+
+impl<T: Record> Piece<'_, T> {
+    /// Sets record `i` of the piece, marking the chunk changed when it is (and raising its weight, as
+    /// [`Mirror::set`]).
+    #[inline]
+    pub fn set(&mut self, i: usize, item: T) {
+        if self.items[i] != item {
+            self.items[i] = item;
+            *self.dirty = true;
+            *self.weight = self.weight.max(item.weight());
+        }
+    }
+}
+
+impl<T: Record> Mirror<T> {
+    /// Ranges of records (start, end) to upload this frame (changed chunks, adjacent ones merged).
+    pub fn dirty_ranges(&self) -> &[(usize, usize)] {
+        &self.ranges
+    }
+
+    /// The greatest weight of chunk `c`'s records (0 for a chunk past the end).
+    pub fn chunk_weight(&self, c: usize) -> f32 {
+        self.weights.get(c).copied().unwrap_or(0.0)
+    }
+
+    /// Sets slot `slot` to `item`, marking its chunk changed when it is and raising its chunk's weight to the
+    /// item's at once (the gather weighs it exactly); a slot past the buffer's end, which the pool's cap keeps from
+    /// happening, is not drawn.
+    pub fn set(&mut self, slot: usize, item: T) {
+        let Some(old) = self.items.get_mut(slot) else { return };
+        if *old != item {
+            *old = item;
+            let c = slot / VOXELS_PER_CHUNK;
+            self.dirty[c] = true;
+            self.weights[c] = self.weights[c].max(item.weight());
+        }
+    }
+
+    /// The chunks as pieces, for tasks that write records in parallel (zip them with the pool's slots chunked by
+    /// [`VOXELS_PER_CHUNK`]).
+    pub fn pieces(&mut self) -> impl IndexedParallelIterator<Item = Piece<'_, T>> {
+        let chunks = self.items.par_chunks_mut(VOXELS_PER_CHUNK);
+        chunks
+            .zip(self.dirty.par_iter_mut())
+            .zip(self.weights.par_iter_mut())
+            .enumerate()
+            .map(|(c, ((items, dirty), weight))| Piece { start: c * VOXELS_PER_CHUNK, items, dirty, weight })
+    }
+
+    /// Turns the changed chunks into this frame's upload ranges and weighs them again.
+    fn collect_changes(&mut self) {
+        self.ranges.clear();
+        for (c, dirty) in self.dirty.iter_mut().enumerate() {
+            if !std::mem::take(dirty) {
+                continue;
+            }
+            let (start, end) = (c * VOXELS_PER_CHUNK, (c + 1) * VOXELS_PER_CHUNK);
+            self.weights[c] = self.items[start..end].iter().map(T::weight).fold(0.0, f32::max);
+            match self.ranges.last_mut() {
                 Some(last) if last.1 == start => last.1 = end,
-                _ => ranges.push((start, end)),
+                _ => self.ranges.push((start, end)),
             }
         }
-        ranges
     }
 
-    /// Whether chunk `c` has a voxel to draw.
-    pub fn chunk_shows(&self, c: usize) -> bool {
-        self.shown.get(c).is_some_and(|n| *n > 0)
-    }
-
-    /// Sets slot `slot` to `voxel`, keeping the chunk's count and dirty flag (a slot past the buffer's end, which
-    /// the pool's cap keeps from happening, is not drawn).
-    fn set(&mut self, slot: usize, voxel: GpuVoxel) {
-        let Some(old) = self.voxels.get_mut(slot).map(|v| std::mem::replace(v, voxel)) else { return };
-        if old == voxel {
+    /// Makes room for `slots` records: whole chunks, doubling (the buffer is replaced at the next gather).
+    pub fn reserve(&mut self, slots: usize) {
+        if slots <= self.items.len() {
             return;
         }
-        let c = slot / VOXELS_PER_CHUNK;
-        self.shown[c] = self.shown[c] + u32::from(voxel.shows()) - u32::from(old.shows());
-        if !self.dirty_flag[c] {
-            self.dirty_flag[c] = true;
-            self.dirty.push(c as u32);
-        }
-    }
-
-    /// Forgets last frame's changes.
-    fn clear_changes(&mut self) {
-        for c in self.dirty.drain(..) {
-            self.dirty_flag[c as usize] = false;
-        }
-        self.whole = false;
-    }
-
-    /// Makes room for `slots` voxels: a bigger buffer (whole chunks, doubling) when needed; returns whether the
-    /// buffer was replaced.
-    fn reserve(&mut self, slots: usize) -> bool {
-        if slots <= self.voxels.len() && self.buffer.is_some() {
-            return false;
-        }
+        let most = ((128 << 20) / size_of::<T>()).next_multiple_of(VOXELS_PER_CHUNK);
         let chunks = slots.div_ceil(VOXELS_PER_CHUNK).max(1).next_power_of_two();
-        let len = (chunks * VOXELS_PER_CHUNK).min(MAX_GPU_VOXELS.next_multiple_of(VOXELS_PER_CHUNK));
-        self.voxels.resize(len, GpuVoxel::default());
-        self.shown.resize(len / VOXELS_PER_CHUNK, 0);
-        self.dirty_flag.resize(len / VOXELS_PER_CHUNK, false);
-        self.whole = true;
-        true
+        let len = (chunks * VOXELS_PER_CHUNK).min(most);
+        self.items.resize(len, T::default());
+        self.weights.resize(len / VOXELS_PER_CHUNK, 0.0);
+        self.dirty.resize(len / VOXELS_PER_CHUNK, false);
+    }
+
+    /// Whether the GPU buffer is missing or smaller than the mirror.
+    fn outgrown(&self) -> bool {
+        self.buffer.is_none() || self.buffer_len < self.items.len()
+    }
+}
+
+/// A resource holding a mirror (the looks, the flights).
+pub trait Mirrored: Resource + Component<Mutability = Mutable> {
+    /// Its records.
+    type Item: Record;
+    /// The mirror.
+    fn mirror(&self) -> &Mirror<Self::Item>;
+    /// The mirror, to change.
+    fn mirror_mut(&mut self) -> &mut Mirror<Self::Item>;
+}
+
+/// The voxels' looks by pool slot: where each is drawn when it is not in flight.
+#[derive(Resource, Debug, Default, Deref, DerefMut)]
+pub struct GpuVoxels(pub Mirror<GpuVoxel>);
+
+impl Mirrored for GpuVoxels {
+    type Item = GpuVoxel;
+    fn mirror(&self) -> &Mirror<GpuVoxel> {
+        &self.0
+    }
+    fn mirror_mut(&mut self) -> &mut Mirror<GpuVoxel> {
+        &mut self.0
     }
 }
 
@@ -145,45 +228,31 @@ impl GpuVoxels {
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VoxelChunk(pub u32);
 
-/// The voxels whose look changed since the last gather (or which are new).
-type ChangedVoxels<'w, 's> = Query<
-    'w,
-    's,
-    (&'static VoxelSlot, &'static GlobalTransform, &'static MeshTag, &'static Visibility),
-    (Without<VoxelCloud>, Or<(Changed<GlobalTransform>, Changed<MeshTag>, Changed<Visibility>)>),
->;
+/// Collects this frame's changed chunks of a mirror: the upload ranges.
+pub(super) fn gather<R: Mirrored>(mut mirrored: ResMut<R>) {
+    mirrored.mirror_mut().collect_changes();
+}
 
-/// Copies the voxels that changed into the mirror (found in parallel, written in one pass), growing the
-/// buffer with the pool.
-fn gather(
-    mut gpu: ResMut<GpuVoxels>,
-    pool: Res<VoxelPool>,
+/// Replaces a mirror's GPU buffer when the pool outgrew it (the new one is uploaded whole).
+fn fit_buffer<R: Mirrored>(
+    mut mirrored: ResMut<R>,
     assets: Res<VoxelAssets>,
-    voxels: ChangedVoxels,
-    mut found: Local<Parallel<Vec<(u32, GpuVoxel)>>>,
     mut buffers: ResMut<Assets<ShaderBuffer>>,
     mut materials: ResMut<Assets<VoxelMaterial>>,
 ) {
-    gpu.clear_changes();
-    if gpu.reserve(pool.slots.len()) {
-        let size = gpu.voxels.len() * size_of::<GpuVoxel>();
+    let gpu = mirrored.mirror_mut();
+    gpu.whole = false;
+    if !gpu.items.is_empty() && gpu.outgrown() {
+        let size = gpu.items.len() * size_of::<R::Item>();
         let buffer = buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
         if let Some(old) = gpu.buffer.replace(buffer.clone()) {
             buffers.remove(&old);
         }
         if let Some(mut material) = materials.get_mut(&assets.material) {
-            material.extension.voxels = buffer;
+            R::Item::bind(&mut material, buffer);
         }
-    }
-    let lists: &Parallel<_> = &found;
-    voxels.par_iter().for_each(|(slot, global, tag, visibility)| {
-        let voxel = GpuVoxel::new(global, tag.0, *visibility != Visibility::Hidden);
-        lists.borrow_local_mut().push((slot.0, voxel));
-    });
-    for list in found.iter_mut() {
-        for (slot, voxel) in list.drain(..) {
-            gpu.set(slot as usize, voxel);
-        }
+        gpu.buffer_len = gpu.items.len();
+        gpu.whole = true;
     }
 }
 
@@ -228,10 +297,17 @@ fn choose_detail(
     detail.set_if_neq(Detail { low: across < LOW_DETAIL_BELOW_PIXELS });
 }
 
+/// Whether chunk `c` has a voxel to draw: one that shows, or one in flight.
+fn drawn(looks: &GpuVoxels, tweens: &VoxelTweens, clock: &GpuClock, c: usize) -> bool {
+    looks.chunk_weight(c) > 0.0 || tweens.mirror().chunk_weight(c) > clock.time
+}
+
 /// Keeps one chunk entity per chunk of the pool, drawn while it has a voxel that shows, with the chosen detail.
 fn fit_chunks(
     mut commands: Commands,
     gpu: Res<GpuVoxels>,
+    tweens: Res<VoxelTweens>,
+    clock: Res<GpuClock>,
     pool: Res<VoxelPool>,
     assets: Res<VoxelAssets>,
     detail: Res<Detail>,
@@ -250,12 +326,12 @@ fn fit_chunks(
             Transform::default(),
             // The boxes sit wherever their voxels are: the chunk mesh's own bounds say nothing about that.
             NoFrustumCulling,
-            if gpu.chunk_shows(c) { Visibility::Inherited } else { Visibility::Hidden },
+            if drawn(&gpu, &tweens, &clock, c) { Visibility::Inherited } else { Visibility::Hidden },
         ));
     }
     *count = (*count).max(needed);
     for (chunk, mut visibility, mut chunk_mesh, mut tag) in &mut chunks {
-        let shows = gpu.chunk_shows(chunk.0 as usize);
+        let shows = drawn(&gpu, &tweens, &clock, chunk.0 as usize);
         visibility.set_if_neq(if shows { Visibility::Inherited } else { Visibility::Hidden });
         if chunk_mesh.0 != *mesh {
             chunk_mesh.0 = mesh.clone();
@@ -292,39 +368,58 @@ fn rebuild_chunk_meshes(
 }
 
 /// Render world: a whole buffer's contents waiting for its GPU buffer to exist.
-#[derive(Resource, Default)]
-struct PendingUpload(Option<(AssetId<ShaderBuffer>, Vec<u8>)>);
+#[derive(Resource)]
+struct PendingUpload<R>(Option<(AssetId<ShaderBuffer>, Vec<u8>)>, std::marker::PhantomData<R>);
 
-/// Extraction: writes the chunks that changed into the GPU buffer (all of it when the buffer is new).
-fn upload(
-    gpu: Extract<Res<GpuVoxels>>,
+impl<R> Default for PendingUpload<R> {
+    fn default() -> Self {
+        Self(None, std::marker::PhantomData)
+    }
+}
+
+/// Extraction: writes the chunks of a mirror that changed into its GPU buffer (all of it when the buffer is new).
+fn upload<R: Mirrored>(
+    mirrored: Extract<Res<R>>,
     buffers: Res<RenderAssets<GpuShaderBuffer>>,
     queue: Res<RenderQueue>,
-    mut pending: ResMut<PendingUpload>,
+    mut pending: ResMut<PendingUpload<R>>,
 ) {
+    let gpu = mirrored.mirror();
     let Some(handle) = &gpu.buffer else { return };
     let target = buffers.get(handle.id()).filter(|_| !gpu.whole && pending.0.is_none());
     let Some(target) = target else {
-        pending.0 = Some((handle.id(), bytemuck::cast_slice(&gpu.voxels).to_vec()));
+        pending.0 = Some((handle.id(), bytemuck::cast_slice(&gpu.items).to_vec()));
         return;
     };
-    for (start, end) in gpu.dirty_ranges() {
-        let end = end.min(gpu.voxels.len());
-        let offset = (start * size_of::<GpuVoxel>()) as u64;
-        queue.write_buffer(&target.buffer, offset, bytemuck::cast_slice(&gpu.voxels[start..end]));
+    for &(start, end) in gpu.dirty_ranges() {
+        let end = end.min(gpu.items.len());
+        let offset = (start * size_of::<R::Item>()) as u64;
+        queue.write_buffer(&target.buffer, offset, bytemuck::cast_slice(&gpu.items[start..end]));
     }
 }
 
 /// Writes a new buffer's contents once Bevy has made it.
-fn upload_pending(
+fn upload_pending<R: Mirrored>(
     buffers: Res<RenderAssets<GpuShaderBuffer>>,
     queue: Res<RenderQueue>,
-    mut pending: ResMut<PendingUpload>,
+    mut pending: ResMut<PendingUpload<R>>,
 ) {
     let Some((id, _)) = &pending.0 else { return };
     let Some(target) = buffers.get(*id) else { return };
     if let Some((_, bytes)) = pending.0.take() {
         queue.write_buffer(&target.buffer, 0, &bytes);
+    }
+}
+
+/// Extraction: writes the frame's flight clock into its buffer.
+fn upload_clock(
+    clock: Extract<Res<GpuClock>>,
+    assets: Extract<Res<VoxelAssets>>,
+    buffers: Res<RenderAssets<GpuShaderBuffer>>,
+    queue: Res<RenderQueue>,
+) {
+    if let Some(target) = buffers.get(assets.clock.id()) {
+        queue.write_buffer(&target.buffer, 0, bytemuck::bytes_of(&**clock));
     }
 }
 
@@ -340,66 +435,74 @@ pub fn triangles_per_frame(world: &mut World) -> u64 {
 
 /// The render side of the instancing plugin.
 pub(super) fn plugin(app: &mut App) {
-    app.init_resource::<GpuVoxels>();
     app.init_resource::<Detail>();
     app.add_systems(
         PostUpdate,
         (
             rebuild_chunk_meshes.in_set(InstancingSystems::Meshes),
-            gather.in_set(InstancingSystems::Gather),
+            (fit_buffer::<GpuVoxels>, fit_buffer::<VoxelTweens>).in_set(InstancingSystems::Buffer),
             choose_detail.in_set(InstancingSystems::Detail),
             fit_chunks.in_set(InstancingSystems::Chunks),
         ),
     );
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
-    render_app.init_resource::<PendingUpload>();
-    render_app.add_systems(ExtractSchedule, upload);
-    render_app.add_systems(Render, upload_pending.in_set(InstancingSystems::Upload));
+    render_app.init_resource::<PendingUpload<GpuVoxels>>().init_resource::<PendingUpload<VoxelTweens>>();
+    render_app.add_systems(ExtractSchedule, (upload::<GpuVoxels>, upload::<VoxelTweens>, upload_clock));
+    render_app.add_systems(
+        Render,
+        (upload_pending::<GpuVoxels>, upload_pending::<VoxelTweens>).in_set(InstancingSystems::Upload),
+    );
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::instancing::voxel_transform;
+    use crate::instancing::Turn;
 
     #[test]
     fn a_voxel_keeps_its_place_turn_size_and_colour_in_32_bytes() {
         assert_eq!(size_of::<GpuVoxel>(), 32);
-        let turn = Quat::from_rotation_y(0.7);
-        let global = GlobalTransform::from(voxel_transform(turn, Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.24, 0.2)));
-        let v = GpuVoxel::new(&global, 0xff11_2233, true);
+        let turn = Turn::new(Quat::from_rotation_y(0.7));
+        let v = turn.place(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.2, 0.24, 0.2), 0xff11_2233);
         assert_eq!(v.color, 0xff11_2233);
-        assert!(Vec3::from(v.translation).distance(turn * Vec3::new(1.0, 2.0, 3.0)) < 1e-6);
+        assert!(v.position().distance(turn.rotation * Vec3::new(1.0, 2.0, 3.0)) < 1e-6);
+        assert!(turn.unturn(v.position()).distance(Vec3::new(1.0, 2.0, 3.0)) < 1e-5);
         // The x axis is the width turned: (cos, −sin) × 0.2; the height and depth as given.
         assert!((v.x_axis[0] - 0.2 * 0.7f32.cos()).abs() < 1e-6 && (v.x_axis[1] + 0.2 * 0.7f32.sin()).abs() < 1e-6);
-        assert!((v.scale_y - 0.24).abs() < 1e-6 && (v.scale_z - 0.2).abs() < 1e-6);
+        assert!(v.scale().distance(Vec3::new(0.2, 0.24, 0.2)) < 1e-6);
         assert!(v.shows());
-        let hidden = GpuVoxel::new(&global, 0xff11_2233, false);
+        let hidden = v.hidden();
         assert!(!hidden.shows() && hidden.x_axis == [0.0; 2] && hidden.scale_z == 0.0);
+        assert_eq!((hidden.translation, hidden.color), (v.translation, v.color));
     }
 
     #[test]
     fn only_changed_chunks_are_uploaded_and_empty_chunks_are_not_drawn() {
         let mut gpu = GpuVoxels::default();
-        assert!(gpu.reserve(3 * VOXELS_PER_CHUNK + 1));
-        assert_eq!(gpu.voxels.len(), 4 * VOXELS_PER_CHUNK, "whole chunks, doubling");
+        gpu.reserve(3 * VOXELS_PER_CHUNK + 1);
+        assert_eq!(gpu.items.len(), 4 * VOXELS_PER_CHUNK, "whole chunks, doubling");
         let shown = GpuVoxel { scale_y: 1.0, ..GpuVoxel::default() };
-        gpu.clear_changes();
         gpu.set(5, shown);
         gpu.set(VOXELS_PER_CHUNK + 7, shown);
-        gpu.set(3 * VOXELS_PER_CHUNK, shown);
+        // A task writing a piece marks its chunk too.
+        gpu.pieces().filter(|p| p.start == 3 * VOXELS_PER_CHUNK).for_each(|mut p| p.set(0, shown));
+        gpu.collect_changes();
         // Chunks 0 and 1 merge into one range; chunk 3 is another.
-        assert_eq!(gpu.dirty_ranges(), vec![(0, 2 * VOXELS_PER_CHUNK), (3 * VOXELS_PER_CHUNK, 4 * VOXELS_PER_CHUNK)]);
-        assert!(gpu.chunk_shows(0) && gpu.chunk_shows(1) && !gpu.chunk_shows(2) && gpu.chunk_shows(3));
-        gpu.clear_changes();
+        assert_eq!(gpu.dirty_ranges(), &[(0, 2 * VOXELS_PER_CHUNK), (3 * VOXELS_PER_CHUNK, 4 * VOXELS_PER_CHUNK)]);
+        let shows = |gpu: &GpuVoxels, c| gpu.chunk_weight(c) > 0.0;
+        assert!(shows(&gpu, 0) && shows(&gpu, 1) && !shows(&gpu, 2) && shows(&gpu, 3));
         // The same value again changes nothing; hiding the last voxel of a chunk stops drawing it.
         gpu.set(5, shown);
+        gpu.pieces().for_each(|mut p| p.set(0, p.items[0]));
+        gpu.collect_changes();
         assert!(gpu.dirty_ranges().is_empty());
         gpu.set(VOXELS_PER_CHUNK + 7, GpuVoxel::default());
-        assert_eq!(gpu.dirty_ranges(), vec![(VOXELS_PER_CHUNK, 2 * VOXELS_PER_CHUNK)]);
-        assert!(!gpu.chunk_shows(1));
+        gpu.collect_changes();
+        assert_eq!(gpu.dirty_ranges(), &[(VOXELS_PER_CHUNK, 2 * VOXELS_PER_CHUNK)]);
+        assert!(!shows(&gpu, 1));
         // A slot past the buffer is ignored.
-        gpu.set(gpu.voxels.len(), shown);
+        let len = gpu.items.len();
+        gpu.set(len, shown);
     }
 
     #[test]

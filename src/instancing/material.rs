@@ -1,4 +1,4 @@
-//! The voxel material: `StandardMaterial` extended with the voxels' storage buffer. Its vertex shaders (the main
+//! The voxel material: `StandardMaterial` extended with the voxels' storage buffers (looks, flights, clock). Its vertex shaders (the main
 //! pass and the prepass, which draws the light's shadow map) place each box of a chunk's mesh at its voxel:
 //! voxel = chunk (`MeshTag`) × boxes per chunk + vertex index / vertices per box.
 
@@ -43,6 +43,12 @@ pub struct VoxelExtension {
     /// The chunk mesh's layout.
     #[uniform(101)]
     pub layout: ChunkLayout,
+    /// The voxels' flights ([`crate::instancing::VoxelTween`]s by pool slot), written when they start.
+    #[storage(102, read_only)]
+    pub flights: Handle<ShaderBuffer>,
+    /// The frame's flight clock ([`crate::instancing::GpuClock`]), written every frame.
+    #[storage(103, read_only)]
+    pub clock: Handle<ShaderBuffer>,
 }
 
 /// The voxel shader (vertex, prepass vertex and fragment entry points).
@@ -74,10 +80,14 @@ pub fn unpack_color(tag: u32) -> [u8; 4] {
     tag.to_le_bytes()
 }
 
-/// The material reading `voxels`: a soft plastic look.
-pub fn voxel_material(voxels: Handle<ShaderBuffer>) -> VoxelMaterial {
+/// The material reading `voxels`, `flights` and `clock`: a soft plastic look.
+pub fn voxel_material(
+    voxels: Handle<ShaderBuffer>,
+    flights: Handle<ShaderBuffer>,
+    clock: Handle<ShaderBuffer>,
+) -> VoxelMaterial {
     ExtendedMaterial {
         base: StandardMaterial { base_color: Color::WHITE, perceptual_roughness: 0.55, reflectance: 0.35, ..default() },
-        extension: VoxelExtension { voxels, layout: ChunkLayout::default() },
+        extension: VoxelExtension { voxels, layout: ChunkLayout::default(), flights, clock },
     }
 }

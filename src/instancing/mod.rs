@@ -1,20 +1,23 @@
-//! The voxel pool: one entity per voxel (its transform, its colour packed in its `MeshTag`, its visibility),
-//! which the transition and the styles move; none of them is a mesh entity. The render side ([`gpu`]) copies
-//! what changed into one storage buffer drawn by a few chunk entities (one instanced draw per view). The pool
-//! grows to the largest model shown and hides its spares. While no model is ready, random pastel boxes float in
-//! its place. The `transition` plugin lays models out.
+//! The voxel pool: a slot per voxel (its home cell, its repel spring, what moves it) and its look ([`GpuVoxel`]:
+//! place, box, colour) in one array that is the GPU buffer's mirror. The transition and the styles write looks
+//! in parallel, a chunk of slots to a task, marking the chunks they change; the render side ([`gpu`]) uploads
+//! only those, and a few chunk entities draw the buffer (one instanced draw per view). No voxel is an entity:
+//! a million of them cost Bevy nothing while they stand still. The pool grows to the largest model shown and
+//! hides its spares. While no model is ready, random pastel boxes float in its place. The `transition` plugin
+//! lays models out.
 
+pub mod flight;
 pub mod gpu;
 pub mod material;
 pub mod mesh;
 
 use bevy::color::Hsla;
-use bevy::math::{Affine3A, Mat3A};
-use bevy::mesh::MeshTag;
+use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 
-pub use gpu::{Detail, GpuVoxel, GpuVoxels, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
+pub use flight::{GpuClock, TweenShow, VoxelTween, VoxelTweens, back_out, flown};
+pub use gpu::{Detail, GpuVoxel, GpuVoxels, Mirror, Piece, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
 pub use material::{ChunkLayout, VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 
 use voxel_core::Voxel;
@@ -38,6 +41,8 @@ pub struct VoxelAssets {
     pub low_chunk_mesh: Handle<Mesh>,
     /// The one material.
     pub material: Handle<VoxelMaterial>,
+    /// The flight clock's buffer.
+    pub clock: Handle<ShaderBuffer>,
 }
 
 impl FromWorld for VoxelAssets {
@@ -50,48 +55,88 @@ impl FromWorld for VoxelAssets {
         let mut meshes = world.resource_mut::<Assets<Mesh>>();
         let (mesh, low_mesh) = (meshes.add(shape), meshes.add(low));
         let (chunk_mesh, low_chunk_mesh) = (meshes.add(chunk), meshes.add(low_chunk));
-        // A placeholder until the pool has voxels (the render side replaces it at the pool's size).
-        let size = VOXELS_PER_CHUNK * size_of::<GpuVoxel>();
-        let voxels = world
-            .resource_mut::<Assets<ShaderBuffer>>()
-            .add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
-        let mut material = voxel_material(voxels);
+        // Placeholders until the pool has voxels (the render side replaces them at the pool's size), and the
+        // clock, written every frame.
+        let mut buffers = world.resource_mut::<Assets<ShaderBuffer>>();
+        let mut buffer =
+            |size| buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
+        let voxels = buffer(VOXELS_PER_CHUNK * size_of::<GpuVoxel>());
+        let flights = buffer(VOXELS_PER_CHUNK * size_of::<VoxelTween>());
+        let clock = buffer(size_of::<GpuClock>());
+        let mut material = voxel_material(voxels, flights, clock.clone());
         material.extension.layout = layout;
         let material = world.resource_mut::<Assets<VoxelMaterial>>().add(material);
-        Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material }
+        Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material, clock }
     }
 }
 
-/// The model's frame: its rotation is the model's spin. Voxels are not its children (a hierarchy of 100k
-/// children costs milliseconds of transform propagation a frame); their transforms are composed with it.
+/// The model's frame: its rotation is the model's spin. Voxels are not entities: they are slots of the
+/// [`VoxelPool`], drawn from [`GpuVoxels`]; their looks are composed with the cloud's turn.
 #[derive(Component, Debug, Default, Reflect)]
 pub struct VoxelCloud;
 
-/// A voxel's world transform for cloud-space `position` and `scale` in a cloud turned by `rotation`.
-pub fn voxel_transform(rotation: Quat, position: Vec3, scale: Vec3) -> Transform {
-    Transform { translation: rotation * position, rotation, scale }
+/// A model's turn about y, ready to place voxels (its matrix computed once, not once per voxel).
+#[derive(Clone, Copy, Debug)]
+pub struct Turn {
+    /// The rotation.
+    pub rotation: Quat,
+    matrix: Mat3A,
 }
 
-/// The global transform of a voxel at world `translation` with box `scale`, in a cloud turned by `turn` (the
-/// same affine as `GlobalTransform::from(voxel_transform(..))`, with the cloud's rotation matrix computed once
-/// per frame by the caller). Voxels have no parent, so the systems that move them write this directly.
-#[inline]
-pub fn voxel_global(turn: Mat3A, scale: Vec3, translation: Vec3) -> GlobalTransform {
-    GlobalTransform::from(Affine3A {
-        matrix3: Mat3A::from_cols(turn.x_axis * scale.x, turn.y_axis * scale.y, turn.z_axis * scale.z),
-        translation: translation.into(),
-    })
+impl Turn {
+    /// The turn by `rotation` (about y: voxels never tilt).
+    pub fn new(rotation: Quat) -> Self {
+        Self { rotation, matrix: Mat3A::from_quat(rotation) }
+    }
+
+    /// The look of a voxel at cloud-space `position` with box `scale` and colour `color`.
+    #[inline]
+    pub fn place(&self, position: Vec3, scale: Vec3, color: u32) -> GpuVoxel {
+        let x = self.matrix.x_axis * scale.x;
+        GpuVoxel {
+            translation: (self.matrix * Vec3A::from(position)).into(),
+            color,
+            x_axis: [x.x, x.z],
+            scale_y: scale.y,
+            scale_z: scale.z,
+        }
+    }
+
+    /// The cloud-space position of a world-space point.
+    pub fn unturn(&self, world: Vec3) -> Vec3 {
+        self.matrix.transpose() * world
+    }
 }
 
-/// A voxel entity and its index in the pool.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
-pub struct VoxelSlot(pub u32);
+/// One slot of the pool: where its voxel belongs and what moves it now.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Slot {
+    /// Its cell in the model shown.
+    pub home: VoxelHome,
+    /// Its repel spring.
+    pub repel: RepelOffset,
+    /// Flying in a transition (or popping): the transition places it.
+    pub flying: bool,
+    /// Part of the falling pile: the pile places it.
+    pub falling: bool,
+    /// Holds no voxel now (a cell an animated model's pose emptied): hidden, left alone by the styles until a
+    /// cell takes it again.
+    pub vacant: bool,
+}
 
-/// The pool's bookkeeping.
+impl Slot {
+    /// At home, where the styles place it: not flying, not falling, not vacant.
+    pub fn at_home(&self) -> bool {
+        !self.flying && !self.falling && !self.vacant
+    }
+}
+
+/// The voxel pool: a slot per voxel (what moves it), their looks in [`GpuVoxels`] (by slot). It grows to the
+/// largest model shown; slots past the model's count are hidden.
 #[derive(Resource, Debug, Default)]
 pub struct VoxelPool {
-    /// Voxel entities, by slot.
-    pub slots: Vec<Entity>,
+    /// The slots.
+    pub slots: Vec<Slot>,
     /// Slots in use (the rest are hidden).
     pub visible: usize,
     /// The model laid out now, if any (none: placeholder boxes).
@@ -115,7 +160,7 @@ pub struct VoxelTarget {
 
 /// Where a voxel belongs in the model shown: its cell centre (cloud space), box scale and source part. The
 /// transition sets it; styles animate around it.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct VoxelHome {
     /// Cell centre in the cloud's frame.
     pub position: Vec3,
@@ -125,13 +170,8 @@ pub struct VoxelHome {
     pub part: u32,
 }
 
-/// A slot inside the model's range that holds no voxel now (a cell an animated model's pose emptied): hidden,
-/// and left alone by the styles until a cell takes it again.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
-pub struct Vacant;
-
 /// Mouse-repel displacement of a voxel (in the cloud's frame, like its home) and its spring velocity.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RepelOffset {
     /// Current displacement.
     pub offset: Vec3,
@@ -184,82 +224,58 @@ pub fn placeholder_targets(count: usize, seed: u64) -> Vec<VoxelTarget> {
         .collect()
 }
 
-fn voxel_bundle(slot: u32) -> impl Bundle {
-    (
-        Name::new("voxel"),
-        VoxelSlot(slot),
-        MeshTag(0),
-        VoxelHome::default(),
-        RepelOffset::default(),
-        Transform::default(),
-        Visibility::Hidden,
-    )
-}
-
-/// Makes sure the pool has at least `count` slots.
-pub fn grow_pool(commands: &mut Commands, pool: &mut VoxelPool, count: usize) {
-    while pool.slots.len() < count {
-        let slot = pool.slots.len() as u32;
-        pool.slots.push(commands.spawn(voxel_bundle(slot)).id());
+/// Makes sure the pool has at least `count` slots (new ones hidden), and the looks room for them.
+pub fn grow_pool(pool: &mut VoxelPool, looks: &mut GpuVoxels, count: usize) {
+    if pool.slots.len() < count {
+        pool.slots.resize(count, Slot::default());
+        looks.reserve(count);
     }
 }
 
-fn setup(mut commands: Commands, mut pool: ResMut<VoxelPool>) {
+fn setup(mut commands: Commands, mut pool: ResMut<VoxelPool>, mut looks: ResMut<GpuVoxels>) {
     commands.spawn((Name::new("voxel cloud"), VoxelCloud, Transform::default(), Visibility::Visible));
-    grow_pool(&mut commands, &mut pool, PLACEHOLDER_COUNT);
+    grow_pool(&mut pool, &mut looks, PLACEHOLDER_COUNT);
 }
 
-/// The voxels' query: slot, transform, colour, visibility (the cloud excluded).
-pub type VoxelQuery<'w, 's> = Query<
-    'w,
-    's,
-    (&'static VoxelSlot, &'static mut Transform, &'static mut MeshTag, &'static mut Visibility),
-    Without<VoxelCloud>,
->;
-
-/// Lays the voxels out for `targets` at once (in a cloud turned by `rotation`): slot i takes target i, the
-/// rest are hidden.
-pub fn apply_targets(pool: &mut VoxelPool, targets: &[VoxelTarget], rotation: Quat, voxels: &mut VoxelQuery) {
-    for (slot, mut transform, mut tag, mut visibility) in voxels.iter_mut() {
-        match targets.get(slot.0 as usize) {
-            Some(t) => {
-                *transform = voxel_transform(rotation, t.position, t.scale);
-                tag.0 = pack_color(t.color);
-                visibility.set_if_neq(Visibility::Inherited);
-            }
-            None => {
-                visibility.set_if_neq(Visibility::Hidden);
-            }
-        }
+/// Lays the voxels out for `targets` at once (in a cloud turned by `turn`): slot i takes target i, the rest are
+/// hidden.
+pub fn apply_targets(pool: &mut VoxelPool, looks: &mut GpuVoxels, targets: &[VoxelTarget], turn: Turn) {
+    for slot in 0..pool.slots.len() {
+        let look = match targets.get(slot) {
+            Some(t) => turn.place(t.position, t.scale, pack_color(t.color)),
+            None => looks.items[slot].hidden(),
+        };
+        looks.set(slot, look);
     }
     pool.visible = targets.len().min(pool.slots.len());
 }
 
 /// Grows the pool for the model to show.
 fn grow_for_current(
-    mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
+    mut looks: ResMut<GpuVoxels>,
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
 ) {
     let needed = library.current_ready(&models).map_or(0, |(_, m)| drawn_count(m, settings.hollow));
-    if needed > pool.slots.len() {
-        grow_pool(&mut commands, &mut pool, needed);
-    }
+    grow_pool(&mut pool, &mut looks, needed);
 }
 
 /// Logic: the pool and its layout (no GPU needed).
 pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelPool>();
+    app.init_resource::<GpuVoxels>();
+    app.init_resource::<VoxelTweens>();
+    app.init_resource::<GpuClock>();
     app.init_resource::<VoxelAssets>();
-    app.register_type::<VoxelSlot>()
-        .register_type::<VoxelCloud>()
-        .register_type::<VoxelHome>()
-        .register_type::<Vacant>()
-        .register_type::<RepelOffset>();
+    app.register_type::<VoxelCloud>();
     app.add_systems(Startup, setup);
     app.add_systems(Update, grow_for_current.in_set(InstancingSystems::Grow));
+    app.add_systems(
+        PostUpdate,
+        (gpu::gather::<GpuVoxels>, gpu::gather::<VoxelTweens>).in_set(InstancingSystems::Gather),
+    );
 }
 
 /// Rendering: the material's pipeline, the voxel buffer and the chunks that draw it.

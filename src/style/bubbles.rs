@@ -4,15 +4,16 @@
 
 use bevy::prelude::*;
 
+use rayon::prelude::*;
+
 use super::Style;
-use crate::instancing::{RepelOffset, Vacant, VoxelHome, VoxelPool, VoxelSlot, voxel_transform};
+use crate::instancing::{GpuVoxels, Turn, VoxelPool, back_out};
 use crate::rng::Rng;
 use crate::schedule::StyleSystems;
 use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
-use crate::transition::{ActiveTransition, VoxelTween, back_out};
+use crate::transition::ActiveTransition;
 
-use super::AtHome;
 use super::repel::away_from_ray;
 
 /// Timings of a burst.
@@ -51,7 +52,7 @@ pub enum BubbleState {
 }
 
 /// A voxel's bubble: its wobble phase and burst state.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bubble {
     /// Wobble phase (radians).
     pub phase: f32,
@@ -80,12 +81,24 @@ impl Bubble {
     }
 }
 
-/// Gives a bubble to every voxel that has none: all of them on entering the style, then the slots the pool
+/// Every slot's bubble, by slot (while the style is on).
+#[derive(Resource, Debug, Default)]
+pub struct Bubbles(pub Vec<Bubble>);
+
+/// Gives a bubble to every slot that has none: all of them on entering the style, then the slots the pool
 /// grows by.
-fn give_bubbles(mut commands: Commands, voxels: Query<(Entity, &VoxelSlot), Without<Bubble>>) {
-    for (entity, slot) in &voxels {
-        let phase = Rng::new(u64::from(slot.0) ^ 0xb0bb1e).f32() * std::f32::consts::TAU;
-        commands.entity(entity).insert(Bubble { phase, state: BubbleState::Whole });
+fn give_bubbles(mut commands: Commands, pool: Res<VoxelPool>, bubbles: Option<ResMut<Bubbles>>) {
+    let new = |slot: usize| {
+        let phase = Rng::new(slot as u64 ^ 0xb0bb1e).f32() * std::f32::consts::TAU;
+        Bubble { phase, state: BubbleState::Whole }
+    };
+    match bubbles {
+        Some(mut bubbles) if bubbles.0.len() < pool.slots.len() => {
+            let have = bubbles.0.len();
+            bubbles.0.extend((have..pool.slots.len()).map(new));
+        }
+        Some(_) => {}
+        None => commands.insert_resource(Bubbles((0..pool.slots.len()).map(new).collect())),
     }
 }
 
@@ -95,19 +108,14 @@ fn take_bubbles(
     mut commands: Commands,
     pool: Res<VoxelPool>,
     active: Res<ActiveTransition>,
-    mut voxels: Query<
-        (Entity, &VoxelSlot, &VoxelHome, &RepelOffset, &mut Transform, &mut Visibility, Has<VoxelTween>, Has<Vacant>),
-        With<Bubble>,
-    >,
+    mut looks: ResMut<GpuVoxels>,
 ) {
-    let turn = active.turn();
-    for (entity, slot, home, repel, mut transform, mut visibility, flying, vacant) in &mut voxels {
-        commands.entity(entity).remove::<Bubble>();
-        // A voxel in flight is placed by its tween; a vacant slot stays hidden.
-        if (slot.0 as usize) < pool.visible && !flying && !vacant {
-            *transform = voxel_transform(turn, home.position + repel.offset, home.scale);
-            visibility.set_if_neq(Visibility::Inherited);
-        }
+    commands.remove_resource::<Bubbles>();
+    let turn = Turn::new(active.turn());
+    // A voxel in flight is placed by its tween; a vacant slot stays hidden.
+    for (i, slot) in pool.slots.iter().enumerate().take(pool.visible).filter(|(_, s)| s.at_home()) {
+        let look = turn.place(slot.home.position + slot.repel.offset, slot.home.scale, looks.items[i].color);
+        looks.set(i, look);
     }
 }
 
@@ -119,7 +127,8 @@ fn burst(
     ray: Res<CursorRay>,
     repel: Res<RepelSettings>,
     active: Res<ActiveTransition>,
-    mut bubbles: Query<(&VoxelSlot, &VoxelHome, &mut Bubble), AtHome>,
+    pool: Res<VoxelPool>,
+    mut bubbles: ResMut<Bubbles>,
     mut frame: Local<u64>,
 ) {
     *frame += 1;
@@ -127,27 +136,26 @@ fn burst(
     let turn = active.turn();
     let radius = repel.radius * 0.6;
     let seed = *frame;
-    bubbles.par_iter_mut().for_each(|(slot, home, mut bubble)| {
-        let next = match bubble.state {
-            BubbleState::Whole => {
-                let near = ray.0.is_some_and(|r| away_from_ray(turn * home.position, r).length() < radius);
-                if near { BubbleState::Bursting(0.0) } else { BubbleState::Whole }
-            }
-            BubbleState::Bursting(t) if t + dt >= timing.burst => {
-                let wait = timing.reform_min
-                    + (timing.reform_max - timing.reform_min) * Rng::new(seed ^ u64::from(slot.0) << 20).f32();
-                BubbleState::Gone(wait)
-            }
-            BubbleState::Bursting(t) => BubbleState::Bursting(t + dt),
-            BubbleState::Gone(left) if left - dt <= 0.0 => BubbleState::Forming(0.0),
-            BubbleState::Gone(left) => BubbleState::Gone(left - dt),
-            BubbleState::Forming(t) if t + dt >= timing.form => BubbleState::Whole,
-            BubbleState::Forming(t) => BubbleState::Forming(t + dt),
-        };
-        if next != bubble.state {
-            bubble.state = next;
-        }
-    });
+    bubbles.0.par_iter_mut().zip(&pool.slots).enumerate().filter(|(_, (_, s))| s.at_home()).for_each(
+        |(slot, (bubble, at))| {
+            bubble.state = match bubble.state {
+                BubbleState::Whole => {
+                    let near = ray.0.is_some_and(|r| away_from_ray(turn * at.home.position, r).length() < radius);
+                    if near { BubbleState::Bursting(0.0) } else { BubbleState::Whole }
+                }
+                BubbleState::Bursting(t) if t + dt >= timing.burst => {
+                    let wait = timing.reform_min
+                        + (timing.reform_max - timing.reform_min) * Rng::new(seed ^ (slot as u64) << 20).f32();
+                    BubbleState::Gone(wait)
+                }
+                BubbleState::Bursting(t) => BubbleState::Bursting(t + dt),
+                BubbleState::Gone(left) if left - dt <= 0.0 => BubbleState::Forming(0.0),
+                BubbleState::Gone(left) => BubbleState::Gone(left - dt),
+                BubbleState::Forming(t) if t + dt >= timing.form => BubbleState::Whole,
+                BubbleState::Forming(t) => BubbleState::Forming(t + dt),
+            };
+        },
+    );
 }
 
 pub(super) fn plugin(app: &mut App) {
@@ -156,7 +164,8 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(OnExit(Style::Bubbles), take_bubbles);
     app.add_systems(
         Update,
-        (give_bubbles.in_set(StyleSystems::Give), burst.in_set(StyleSystems::Burst)).run_if(in_state(Style::Bubbles)),
+        (give_bubbles.in_set(StyleSystems::Give), burst.run_if(resource_exists::<Bubbles>).in_set(StyleSystems::Burst))
+            .run_if(in_state(Style::Bubbles)),
     );
 }
 

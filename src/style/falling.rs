@@ -7,17 +7,15 @@
 use bevy::prelude::*;
 
 use crate::style::ToggleFall;
-use bevy::mesh::MeshTag;
 
 use super::Style;
 use crate::instancing::{
-    MAX_DRAWN, RepelOffset, VoxelCloud, VoxelHome, VoxelPool, VoxelSlot, floor_height, grow_pool, pack_color,
-    voxel_target, voxel_transform,
+    GpuVoxels, MAX_DRAWN, Slot, Turn, VoxelHome, VoxelPool, floor_height, grow_pool, pack_color, voxel_target,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
-use crate::schedule::{AppSystems, StyleSystems};
+use crate::schedule::StyleSystems;
 use crate::settings::VoxelSettings;
-use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, TransitionStarted, VoxelTween};
+use crate::transition::{ActiveTransition, Reassemble, TransitionFinished, TransitionStarted};
 
 use super::pile::{Pile, PileParams};
 
@@ -25,13 +23,17 @@ use super::pile::{Pile, PileParams};
 /// are in Morton order, so consecutive ones are near), ⌈voxels / `FALL_CAP`⌉ a clump, each one body of the pile.
 pub const FALL_CAP: usize = 100_000;
 
-/// A voxel that is part of the falling pile, with the index of its body in it.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Falling(pub u32);
-
-/// Where a voxel of a clump sits from its clump's body (only when the model falls in clumps).
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
-pub struct ClumpOffset(pub Vec3);
+/// A voxel of the falling pile: its slot, its body in the pile and where it sits from its body (a clump's
+/// voxels share a body when the model falls in clumps).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Falling {
+    /// Its pool slot.
+    pub slot: u32,
+    /// Its body.
+    pub body: u32,
+    /// From the body's centre to the voxel's (zero when a voxel is its own body).
+    pub offset: Vec3,
+}
 
 /// The pile in motion.
 #[derive(Resource, Debug)]
@@ -40,6 +42,8 @@ pub struct FallingPile {
     pub pile: Pile,
     /// The model the voxels belong to.
     pub model: AssetId<VoxelModelAsset>,
+    /// Its voxels, in slot order.
+    pub voxels: Vec<Falling>,
 }
 
 /// Whether the voxels should be falling (the style is on and F has not called them back).
@@ -75,9 +79,9 @@ fn request_fall(mut requested: ResMut<FallRequested>) {
 }
 
 /// Ends the pile: the voxels stay where they lie until the transition moves them.
-fn release(commands: &mut Commands, falling: &Query<Entity, With<Falling>>) {
-    for entity in falling {
-        commands.entity(entity).remove::<(Falling, ClumpOffset)>();
+fn release(commands: &mut Commands, pool: &mut VoxelPool, pile: &FallingPile) {
+    for v in &pile.voxels {
+        pool.slots[v.slot as usize].falling = false;
     }
     commands.remove_resource::<FallingPile>();
 }
@@ -88,13 +92,12 @@ fn reassemble_on_exit(
     mut requested: ResMut<FallRequested>,
     mut pool: ResMut<VoxelPool>,
     pile: Option<Res<FallingPile>>,
-    falling: Query<Entity, With<Falling>>,
     mut reassemble: MessageWriter<Reassemble>,
 ) {
     requested.0 = false;
     pool.held = false;
-    if pile.is_some() {
-        release(&mut commands, &falling);
+    if let Some(pile) = pile {
+        release(&mut commands, &mut pool, &pile);
         reassemble.write(Reassemble);
     }
 }
@@ -107,14 +110,12 @@ fn control(
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     mut pool: ResMut<VoxelPool>,
+    mut looks: ResMut<GpuVoxels>,
     active: Res<ActiveTransition>,
     resting: Res<RestingOn>,
     mut requested: ResMut<FallRequested>,
     mut seed: ResMut<PileSeed>,
     pile: Option<Res<FallingPile>>,
-    voxels: Query<(Entity, &VoxelSlot, &GlobalTransform, &Visibility), (Without<VoxelTween>, Without<VoxelCloud>)>,
-    tweening: Query<(), With<VoxelTween>>,
-    falling: Query<Entity, With<Falling>>,
     mut reassemble: MessageWriter<Reassemble>,
 ) {
     if toggles.read().count() % 2 == 1 {
@@ -127,7 +128,7 @@ fn control(
         // Another model (once it is ready): its morph starts from wherever the voxels lie.
         let model_changed = wanted.is_some_and(|w| w != pile.model);
         if !requested.0 || model_changed {
-            release(&mut commands, &falling);
+            release(&mut commands, &mut pool, pile);
             if model_changed {
                 requested.0 = false;
             } else {
@@ -141,7 +142,7 @@ fn control(
         return;
     };
     // Voxels still popping (an animated model's last pose) land first.
-    if !tweening.is_empty() {
+    if pool.slots.iter().any(|s| s.flying) {
         return;
     }
     let Some(model) = models.get(id) else { return };
@@ -153,52 +154,43 @@ fn control(
         Vec::new()
     };
     let needed = pool.visible + interior.len();
-    if pool.slots.len() < needed {
-        // The new slots exist from the next frame on.
-        grow_pool(&mut commands, &mut pool, needed);
-        return;
-    }
-    // In slot order: query order depends on how tables were rearranged, and the pile must not.
-    let mut shown: Vec<(u32, Entity, Vec3)> = voxels
-        .iter()
-        .filter(|(_, _, _, v)| **v != Visibility::Hidden)
-        .map(|(e, s, g, _)| (s.0, e, g.translation()))
+    grow_pool(&mut pool, &mut looks, needed);
+    // In slot order, so the pile does not depend on anything else.
+    let shown: Vec<(u32, Vec3)> = (0..pool.slots.len())
+        .filter(|&i| !pool.slots[i].flying && looks.items[i].shows())
+        .map(|i| (i as u32, looks.items[i].position()))
         .collect();
-    shown.sort_unstable_by_key(|s| s.0);
     if shown.is_empty() {
         return;
     }
-    let turn = active.turn();
-    let starts: Vec<Vec3> = shown.iter().map(|s| s.2).chain(interior.iter().map(|t| turn * t.position)).collect();
-    let clump = starts.len().div_ceil(FALL_CAP);
+    let turn = Turn::new(active.turn());
+    let first_spare = pool.visible;
+    for (k, t) in interior.iter().enumerate() {
+        let home = VoxelHome { position: t.position, scale: t.scale, part: t.part };
+        pool.slots[first_spare + k] = Slot { home, ..Slot::default() };
+        looks.set(first_spare + k, turn.place(t.position, t.scale, pack_color(t.color)));
+    }
+    let members: Vec<(u32, Vec3)> = shown
+        .into_iter()
+        .chain(interior.iter().enumerate().map(|(k, t)| ((first_spare + k) as u32, turn.rotation * t.position)))
+        .collect();
+    let clump = members.len().div_ceil(FALL_CAP);
     // A clump is a body as wide as its voxels together.
     let cell = model.spec.cell.iter().copied().fold(0.0f32, f32::max) * settings.box_size * (clump as f32).cbrt();
     let params = PileParams::for_cell(cell, floor_height(model));
-    let bodies = starts.chunks(clump).map(|c| c[0]).collect();
+    let bodies = members.chunks(clump).map(|c| c[0].1).collect();
     let pile = Pile::new(bodies, params, seed.0);
     seed.0 += 1;
-    let place = |commands: &mut Commands, entity: Entity, i: usize| {
-        let body = i / clump;
-        commands.entity(entity).insert(Falling(body as u32));
-        if clump > 1 {
-            commands.entity(entity).insert(ClumpOffset(starts[i] - starts[body * clump]));
-        }
-    };
-    for (i, (_, entity, _)) in shown.iter().enumerate() {
-        place(&mut commands, *entity, i);
-    }
-    for (k, t) in interior.iter().enumerate() {
-        let entity = pool.slots[pool.visible + k];
-        commands.entity(entity).insert((
-            voxel_transform(turn, t.position, t.scale),
-            MeshTag(pack_color(t.color)),
-            Visibility::Inherited,
-            VoxelHome { position: t.position, scale: t.scale, part: t.part },
-            RepelOffset::default(),
-        ));
-        place(&mut commands, entity, shown.len() + k);
-    }
-    commands.insert_resource(FallingPile { pile, model: id });
+    let voxels = members
+        .iter()
+        .enumerate()
+        .map(|(i, &(slot, at))| {
+            let body = i / clump;
+            pool.slots[slot as usize].falling = true;
+            Falling { slot, body: body as u32, offset: at - members[body * clump].1 }
+        })
+        .collect();
+    commands.insert_resource(FallingPile { pile, model: id, voxels });
 }
 
 /// One fixed step of the pile.
@@ -206,21 +198,18 @@ fn step(mut pile: ResMut<FallingPile>) {
     pile.pile.step();
 }
 
-/// Writes the pile's positions into the falling voxels (their global transform too: voxels have no parent).
-fn sync(
-    pile: Res<FallingPile>,
-    mut voxels: Query<(&Falling, Option<&ClumpOffset>, &mut Transform, &mut GlobalTransform)>,
-) {
+/// Writes the pile's positions into the falling voxels' looks.
+fn sync(pile: Res<FallingPile>, mut looks: ResMut<GpuVoxels>) {
     if !pile.is_changed() {
         return;
     }
-    voxels.par_iter_mut().for_each(|(falling, offset, mut transform, mut global)| {
-        if let Some(p) = pile.pile.positions.get(falling.0 as usize) {
-            let transform = transform.bypass_change_detection();
-            transform.translation = *p + offset.map_or(Vec3::ZERO, |o| o.0);
-            *global = GlobalTransform::from(*transform);
+    for v in &pile.voxels {
+        if let Some(p) = pile.pile.positions.get(v.body as usize) {
+            let mut look = looks.items[v.slot as usize];
+            look.translation = (*p + v.offset).into();
+            looks.set(v.slot as usize, look);
         }
-    });
+    }
 }
 
 pub(super) fn plugin(app: &mut App) {
@@ -234,5 +223,5 @@ pub(super) fn plugin(app: &mut App) {
         (track_rest.in_set(StyleSystems::Rest), control.run_if(in_state(Style::Falling)).in_set(StyleSystems::Control)),
     );
     app.add_systems(FixedUpdate, step.run_if(resource_exists::<FallingPile>).in_set(StyleSystems::Fall));
-    app.add_systems(Update, sync.run_if(resource_exists::<FallingPile>).in_set(AppSystems::Sync));
+    app.add_systems(Update, sync.run_if(resource_exists::<FallingPile>).in_set(StyleSystems::Pile));
 }

@@ -2,8 +2,8 @@
 //! repel in every style. The style is a Bevy state ([`Style`]): entering one swaps the shared voxel mesh and
 //! the material's look (the single batch stays) and sets up what the style needs (bubbles, a falling pile);
 //! leaving tears it down. Lego re-voxelizes with cells 1.2× taller (the voxelizer options follow the state).
-//! Voxels at home (not tweening, not falling) are placed (`place`) from their home cell, their bubble wobble
-//! and their repel spring.
+//! Voxels at home (`Slot::at_home`: not flying, not falling, not vacant) are placed (`place`) from their home
+//! cell, their bubble wobble and their repel spring.
 
 pub mod bubbles;
 pub mod falling;
@@ -15,11 +15,9 @@ pub mod repel;
 use bevy::prelude::*;
 
 use crate::instancing::mesh::{facing_box, rounded_box};
-use crate::instancing::{Vacant, VoxelAssets, VoxelCloud, VoxelMaterial};
-use crate::schedule::AppSystems;
+use crate::instancing::{VoxelAssets, VoxelMaterial};
+use crate::schedule::{AppSystems, StyleSystems};
 use crate::settings::VoxelSettings;
-use crate::transition::VoxelTween;
-use falling::Falling;
 use repel::RepelActive;
 
 /// How voxels look and move: a Bevy state. Each style sets itself up on entering it and tears itself down on
@@ -71,9 +69,6 @@ pub struct CursorRay(pub Option<Ray3d>);
 /// F: drop the voxels or call them back (the falling style acts on it).
 #[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ToggleFall;
-
-/// Voxels at home, which styles may move: not flying in a transition (or popping), not falling, not a vacant slot.
-pub type AtHome = (Without<VoxelTween>, Without<Falling>, Without<VoxelCloud>, Without<Vacant>);
 
 /// The mesh of a style.
 pub fn style_mesh(style: Style, roundness: f32) -> Mesh {
@@ -132,6 +127,6 @@ pub(super) fn plugin(app: &mut App) {
         app.add_systems(OnEnter(style), wear_style);
     }
     app.add_systems(Update, wear_style.run_if(roundness_changed).in_set(AppSystems::Sync));
-    app.add_systems(Update, place::place_at_home.in_set(AppSystems::Sync));
+    app.add_systems(Update, place::place_at_home.in_set(StyleSystems::Place));
     app.add_plugins((bubbles::plugin, falling::plugin));
 }

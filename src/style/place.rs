@@ -1,27 +1,21 @@
 //! Placing the voxels at home each frame: home cell + bubble wobble + repel spring, turned with the model.
 //!
-//! The voxels are walked as whole component slices (Bevy's contiguous query iteration), split over the
-//! cores with `rayon::join`. With 100k voxels a per-entity `par_iter` closure cost more than the work it
-//! wrapped (3.4 ms against 1.2 ms for the same loop over plain slices, README "Repel"), and every voxel
-//! the cursor leaves alone costs one distance test.
+//! The pool's slots and their looks are walked a chunk to a task (rayon over the cores); every voxel the
+//! cursor leaves alone costs one distance test and writes nothing, so its chunk is not uploaded.
 
-use bevy::ecs::change_detection::{ContiguousMut, Tick};
-use bevy::ecs::system::SystemChangeTick;
-use bevy::math::{Mat3A, Vec3A};
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use bevy::prelude::*;
+use rayon::prelude::*;
 
 use super::Style;
-use crate::instancing::{RepelOffset, VoxelHome, VoxelPool, VoxelSlot, voxel_global};
+use crate::instancing::{GpuVoxel, GpuVoxels, Piece, Slot, Turn, VOXELS_PER_CHUNK, VoxelPool};
 use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
 
-use super::AtHome;
-use super::bubbles::{Bubble, BubbleSettings};
+use super::bubbles::{Bubble, BubbleSettings, Bubbles};
 use super::repel::{RepelActive, repel_target};
-
-/// Voxels one task places (smaller runs are not split further).
-const PIECE: usize = 4096;
 
 /// Everything placing needs besides the voxels: the model's turn, the cursor and the clock.
 #[derive(Clone, Debug)]
@@ -42,105 +36,32 @@ pub struct Placement {
     pub in_model: usize,
     /// Bubble timings and wobble.
     pub bubbles: BubbleSettings,
-    /// This system run's change tick (set on the transforms and visibilities written).
-    pub now: Tick,
-}
-
-/// Voxels lying side by side in one table: their components as parallel slices (same length), with the
-/// change ticks of the components other systems watch.
-pub struct VoxelRun<'a> {
-    /// Pool slots.
-    pub slots: &'a [VoxelSlot],
-    /// Home cells.
-    pub homes: &'a [VoxelHome],
-    /// Repel springs.
-    pub repels: &'a mut [RepelOffset],
-    /// Bubbles, when the table's voxels have them.
-    pub bubbles: Option<&'a [Bubble]>,
-    /// Transforms (written without change detection, as everywhere voxels are placed).
-    pub transforms: &'a mut [Transform],
-    /// Global transforms (what the renderer reads) …
-    pub globals: &'a mut [GlobalTransform],
-    /// … and their change ticks.
-    pub global_ticks: &'a mut [Tick],
-    /// Visibilities (bubbles vanish while burst) …
-    pub visibilities: &'a mut [Visibility],
-    /// … and their change ticks.
-    pub visibility_ticks: &'a mut [Tick],
-}
-
-impl<'a> VoxelRun<'a> {
-    /// Number of voxels.
-    pub fn len(&self) -> usize {
-        self.slots.len()
-    }
-
-    /// Whether the run is empty.
-    pub fn is_empty(&self) -> bool {
-        self.slots.is_empty()
-    }
-
-    /// The first `mid` voxels and the rest.
-    fn split_at(self, mid: usize) -> (VoxelRun<'a>, VoxelRun<'a>) {
-        let (slots, slots_b) = self.slots.split_at(mid);
-        let (homes, homes_b) = self.homes.split_at(mid);
-        let (repels, repels_b) = self.repels.split_at_mut(mid);
-        let (bubbles, bubbles_b) = self.bubbles.map(|b| b.split_at(mid)).unzip();
-        let (transforms, transforms_b) = self.transforms.split_at_mut(mid);
-        let (globals, globals_b) = self.globals.split_at_mut(mid);
-        let (global_ticks, global_ticks_b) = self.global_ticks.split_at_mut(mid);
-        let (visibilities, visibilities_b) = self.visibilities.split_at_mut(mid);
-        let (visibility_ticks, visibility_ticks_b) = self.visibility_ticks.split_at_mut(mid);
-        (
-            VoxelRun {
-                slots,
-                homes,
-                repels,
-                bubbles,
-                transforms,
-                globals,
-                global_ticks,
-                visibilities,
-                visibility_ticks,
-            },
-            VoxelRun {
-                slots: slots_b,
-                homes: homes_b,
-                repels: repels_b,
-                bubbles: bubbles_b,
-                transforms: transforms_b,
-                globals: globals_b,
-                global_ticks: global_ticks_b,
-                visibilities: visibilities_b,
-                visibility_ticks: visibility_ticks_b,
-            },
-        )
-    }
 }
 
 impl Placement {
-    /// Places every voxel of `run` that moves (all of them with bubbles; otherwise those the cursor reaches
-    /// or whose spring still moves), over all cores. Returns whether any voxel is still off its cell.
-    pub fn place(&self, run: VoxelRun) -> bool {
-        if run.len() <= PIECE {
-            return self.place_piece(run);
-        }
-        let half = run.len() / 2;
-        let (a, b) = run.split_at(half);
-        let (displaced_a, displaced_b) = rayon::join(|| self.place(a), || self.place(b));
-        displaced_a || displaced_b
+    /// Places every voxel of `slots` at home that moves (all of them with `bubbles`, by slot; otherwise those the
+    /// cursor reaches or whose spring still moves) into `looks`, over all cores. Returns whether any voxel is
+    /// still off its cell.
+    pub fn place(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, looks: &mut GpuVoxels) -> bool {
+        let displaced = AtomicBool::new(false);
+        slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(looks.pieces()).for_each(|(slots, mut piece)| {
+            if self.place_piece(slots, bubbles, &mut piece) {
+                displaced.store(true, Ordering::Relaxed);
+            }
+        });
+        displaced.into_inner()
     }
 
-    fn place_piece(&self, run: VoxelRun) -> bool {
-        let turn = Mat3A::from_quat(self.rotation);
+    fn place_piece(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, piece: &mut Piece<GpuVoxel>) -> bool {
+        let turn = Turn::new(self.rotation);
         let mut displaced = false;
-        for i in 0..run.len() {
-            if run.slots[i].0 as usize >= self.in_model {
+        for (i, slot) in slots.iter_mut().enumerate() {
+            if piece.start + i >= self.in_model || !slot.at_home() {
                 continue;
             }
-            let home = &run.homes[i];
-            let repel = &mut run.repels[i];
-            let bubble = run.bubbles.map(|b| &b[i]);
+            let home = &slot.home;
+            let repel = &mut slot.repel;
+            let bubble = bubbles.and_then(|b| b.get(piece.start + i));
             let target = repel_target(home.position, self.ray, self.radius, self.strength);
             let still = target == Vec3::ZERO && repel.is_rest();
             if still && bubble.is_none() {
@@ -160,22 +81,10 @@ impl Placement {
                     let (grow, shown) = b.scale(&self.bubbles);
                     (b.wobble(self.time, home.part, self.bubbles.wobble) * home.scale.max_element(), grow, shown)
                 }
-                None => (Vec3::ZERO, 1.0, true),
+                None => (Vec3::ZERO, 1.0, piece.items[i].shows()),
             };
-            let translation = Vec3::from(turn * Vec3A::from(home.position + wobble + repel.offset));
-            let scale = home.scale * grow;
-            // As in the transition step: the global transform is written directly (the renderer reads it; its
-            // tick tells extraction it changed) and the Transform is kept in step without change detection.
-            run.transforms[i] = Transform { translation, rotation: self.rotation, scale };
-            run.globals[i] = voxel_global(turn, scale, translation);
-            run.global_ticks[i] = self.now;
-            if bubble.is_some() {
-                let visibility = if shown { Visibility::Inherited } else { Visibility::Hidden };
-                if run.visibilities[i] != visibility {
-                    run.visibilities[i] = visibility;
-                    run.visibility_ticks[i] = self.now;
-                }
-            }
+            let look = turn.place(home.position + wobble + repel.offset, home.scale * grow, piece.items[i].color);
+            piece.set(i, if shown { look } else { look.hidden() });
         }
         displaced
     }
@@ -191,24 +100,14 @@ pub(super) fn place_at_home(
     timing: Res<BubbleSettings>,
     cursor: Res<CursorRay>,
     active: Res<ActiveTransition>,
-    pool: Res<VoxelPool>,
-    mut voxels: Query<
-        (
-            &VoxelSlot,
-            &VoxelHome,
-            &mut RepelOffset,
-            Option<&Bubble>,
-            &mut Transform,
-            &mut GlobalTransform,
-            &mut Visibility,
-        ),
-        AtHome,
-    >,
+    mut pool: ResMut<VoxelPool>,
+    bubbles: Option<Res<Bubbles>>,
+    mut looks: ResMut<GpuVoxels>,
     mut springs: ResMut<RepelActive>,
-    ticks: SystemChangeTick,
 ) {
     let ray = cursor.0.filter(|_| repel.enabled);
-    if *style.get() != Style::Bubbles && ray.is_none() && !springs.0 {
+    let bubbles = bubbles.as_ref().map(|b| &b.0[..]).filter(|_| *style.get() == Style::Bubbles);
+    if bubbles.is_none() && ray.is_none() && !springs.0 {
         return;
     }
     let rotation = active.turn();
@@ -222,76 +121,48 @@ pub(super) fn place_at_home(
         time: time.elapsed_secs() * settings.speed,
         in_model: pool.visible,
         bubbles: timing.clone(),
-        now: ticks.this_run(),
     };
-    let mut displaced = false;
-    let runs = voxels.contiguous_iter_mut().expect("voxel components are stored in tables");
-    for (slots, homes, repels, bubbles, transforms, globals, visibilities) in runs {
-        let (repels, _) = ContiguousMut::bypass_change_detection_split(repels);
-        let (transforms, _) = ContiguousMut::bypass_change_detection_split(transforms);
-        let (globals, mut global_ticks) = ContiguousMut::bypass_change_detection_split(globals);
-        let (visibilities, mut visibility_ticks) = ContiguousMut::bypass_change_detection_split(visibilities);
-        let run = VoxelRun {
-            slots,
-            homes,
-            repels,
-            bubbles,
-            transforms,
-            globals,
-            global_ticks: global_ticks.changed_mut(),
-            visibilities,
-            visibility_ticks: visibility_ticks.changed_mut(),
-        };
-        displaced |= placement.place(run);
-    }
-    springs.0 = displaced;
+    springs.0 = placement.place(&mut pool.slots, bubbles, &mut looks);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::instancing::VoxelHome;
     use crate::style::bubbles::BubbleState;
 
-    /// `n` voxels in a row along x (one cell apart, slot = index) with their components.
+    /// `n` voxels in a row along x (one cell apart, slot = index), their looks, and bubbles if asked.
     struct Voxels {
-        slots: Vec<VoxelSlot>,
-        homes: Vec<VoxelHome>,
-        repels: Vec<RepelOffset>,
+        slots: Vec<Slot>,
         bubbles: Option<Vec<Bubble>>,
-        transforms: Vec<Transform>,
-        globals: Vec<GlobalTransform>,
-        global_ticks: Vec<Tick>,
-        visibilities: Vec<Visibility>,
-        visibility_ticks: Vec<Tick>,
+        looks: GpuVoxels,
     }
+
+    /// The look every voxel starts with (nothing placed yet).
+    const UNPLACED: u32 = 0xdead_beef;
 
     impl Voxels {
         fn row(n: usize, bubbles: Option<BubbleState>) -> Self {
+            let home = |i: usize| VoxelHome { position: Vec3::X * i as f32, scale: Vec3::ONE, part: 0 };
+            let mut looks = GpuVoxels::default();
+            looks.reserve(n);
+            for i in 0..n {
+                looks.set(i, Turn::new(Quat::IDENTITY).place(Vec3::ZERO, Vec3::ONE, UNPLACED));
+            }
             Voxels {
-                slots: (0..n as u32).map(VoxelSlot).collect(),
-                homes: (0..n).map(|i| VoxelHome { position: Vec3::X * i as f32, scale: Vec3::ONE, part: 0 }).collect(),
-                repels: vec![RepelOffset::default(); n],
+                slots: (0..n).map(|i| Slot { home: home(i), ..Slot::default() }).collect(),
                 bubbles: bubbles.map(|state| vec![Bubble { phase: 0.0, state }; n]),
-                transforms: vec![Transform::default(); n],
-                globals: vec![GlobalTransform::default(); n],
-                global_ticks: vec![Tick::new(1); n],
-                visibilities: vec![Visibility::Inherited; n],
-                visibility_ticks: vec![Tick::new(1); n],
+                looks,
             }
         }
 
-        fn run(&mut self) -> VoxelRun<'_> {
-            VoxelRun {
-                slots: &self.slots,
-                homes: &self.homes,
-                repels: &mut self.repels,
-                bubbles: self.bubbles.as_deref(),
-                transforms: &mut self.transforms,
-                globals: &mut self.globals,
-                global_ticks: &mut self.global_ticks,
-                visibilities: &mut self.visibilities,
-                visibility_ticks: &mut self.visibility_ticks,
-            }
+        fn place(&mut self, p: &Placement) -> bool {
+            p.place(&mut self.slots, self.bubbles.as_deref(), &mut self.looks)
+        }
+
+        /// Whether voxel `i` was written (it moved from where it started).
+        fn written(&self, i: usize) -> bool {
+            self.looks.items[i].position() != Vec3::ZERO
         }
     }
 
@@ -306,27 +177,27 @@ mod tests {
             time: 0.0,
             in_model,
             bubbles: BubbleSettings::default(),
-            now: Tick::new(7),
         }
     }
 
     #[test]
-    fn only_voxels_the_cursor_reaches_move_and_are_marked_changed() {
+    fn only_voxels_the_cursor_reaches_move() {
         let mut voxels = Voxels::row(6, None);
         let p = placement(2.0, 5);
-        assert!(p.place(voxels.run()));
+        assert!(voxels.place(&p));
         for i in 0..6 {
             let reached = (1..=3).contains(&i);
-            assert_eq!(voxels.global_ticks[i] == Tick::new(7), reached, "voxel {i}");
-            assert_eq!(voxels.repels[i].is_rest(), !reached, "voxel {i}");
+            assert_eq!(voxels.written(i), reached, "voxel {i}");
+            assert_eq!(voxels.slots[i].repel.is_rest(), !reached, "voxel {i}");
         }
         // Voxel 1 is pushed towards −x, voxel 3 towards +x (cloud frame); the one under the cursor sideways.
-        assert!(voxels.repels[1].offset.x < 0.0 && voxels.repels[3].offset.x > 0.0);
-        // Placed in the turned cloud: home + offset, rotated a quarter turn about y.
-        let expected = p.rotation * (voxels.homes[3].position + voxels.repels[3].offset);
-        assert!(voxels.transforms[3].translation.distance(expected) < 1e-5);
-        assert!(voxels.globals[3].translation().distance(expected) < 1e-5);
-        assert_eq!(voxels.transforms[3].rotation, p.rotation);
+        assert!(voxels.slots[1].repel.offset.x < 0.0 && voxels.slots[3].repel.offset.x > 0.0);
+        // Placed in the turned cloud: home + offset, rotated a quarter turn about y, its colour kept.
+        let expected = p.rotation * (voxels.slots[3].home.position + voxels.slots[3].repel.offset);
+        let look = voxels.looks.items[3];
+        assert!(look.position().distance(expected) < 1e-5);
+        assert!(look.x_axis[0].abs() < 1e-6 && (look.x_axis[1] + 1.0).abs() < 1e-6, "turned: {:?}", look.x_axis);
+        assert_eq!(look.color, UNPLACED);
     }
 
     #[test]
@@ -334,55 +205,57 @@ mod tests {
         let mut voxels = Voxels::row(6, None);
         let p = placement(2.0, 5);
         for _ in 0..120 {
-            p.place(voxels.run());
+            voxels.place(&p);
         }
-        let held = voxels.repels[3];
+        let held = voxels.slots[3].repel;
         assert!(held.velocity == Vec3::ZERO && held.offset.length() > 0.1, "{held:?}");
-        let later = Placement { now: Tick::new(9), ..p };
-        assert!(later.place(voxels.run()), "held voxels are still off their cells");
-        assert!(voxels.global_ticks.iter().all(|t| *t != Tick::new(9)), "held voxels rewritten");
+        let before = voxels.looks.items.clone();
+        assert!(voxels.place(&p), "held voxels are still off their cells");
+        assert_eq!(voxels.looks.items, before, "held voxels rewritten");
     }
 
     #[test]
-    fn spares_are_left_alone_and_springs_come_to_rest_without_a_cursor() {
+    fn spares_and_flying_voxels_are_left_alone_and_springs_come_to_rest_without_a_cursor() {
         let mut voxels = Voxels::row(6, None);
+        voxels.slots[2].flying = true;
         let p = placement(5.0, 5);
-        assert!(p.place(voxels.run()));
-        assert!(voxels.repels[5].is_rest(), "a spare slot moved");
-        assert_eq!(voxels.global_ticks[5], Tick::new(1));
+        assert!(voxels.place(&p));
+        assert!(voxels.slots[5].repel.is_rest() && !voxels.written(5), "a spare slot moved");
+        let mut near = Voxels::row(6, None);
+        near.slots[2].flying = true;
+        near.place(&placement(2.0, 5));
+        assert!(near.slots[2].repel.is_rest() && !near.written(2), "a flying voxel was placed");
         let gone = Placement { ray: None, ..p };
         for _ in 0..120 {
-            gone.place(voxels.run());
+            voxels.place(&gone);
         }
-        assert!(!gone.place(voxels.run()), "springs still moving after 2 s");
-        assert!(voxels.transforms[4].translation.distance(gone.rotation * voxels.homes[4].position) < 1e-5);
+        assert!(!voxels.place(&gone), "springs still moving after 2 s");
+        assert!(voxels.looks.items[4].position().distance(gone.rotation * voxels.slots[4].home.position) < 1e-5);
     }
 
     #[test]
-    fn long_runs_split_over_tasks_place_every_voxel_like_one_piece() {
-        let n = 3 * PIECE + 17;
+    fn many_chunks_are_placed_like_one() {
+        let n = 3 * VOXELS_PER_CHUNK + 17;
         let p = Placement { radius: n as f32, ..placement(n as f32 / 2.0, n) };
-        let mut split = Voxels::row(n, None);
-        p.place(split.run());
-        let mut whole = Voxels::row(n, None);
-        p.place_piece(whole.run());
-        assert_eq!(split.repels, whole.repels);
-        assert_eq!(split.transforms, whole.transforms);
-        assert!(split.global_ticks.iter().all(|t| *t == Tick::new(7)));
+        let mut voxels = Voxels::row(n, None);
+        voxels.place(&p);
+        for i in [0, VOXELS_PER_CHUNK, n - 1] {
+            let expected = p.rotation * (voxels.slots[i].home.position + voxels.slots[i].repel.offset);
+            assert!(voxels.looks.items[i].position().distance(expected) < 1e-2, "voxel {i}");
+            assert!(!voxels.slots[i].repel.is_rest(), "voxel {i}");
+        }
     }
 
     #[test]
     fn burst_bubbles_are_hidden_and_whole_ones_wobble() {
         let mut gone = Voxels::row(3, Some(BubbleState::Gone(0.5)));
         let far = Placement { ray: None, time: 0.7, ..placement(0.0, 3) };
-        far.place(gone.run());
-        assert!(gone.visibilities.iter().all(|v| *v == Visibility::Hidden));
-        assert!(gone.visibility_ticks.iter().all(|t| *t == Tick::new(7)));
+        gone.place(&far);
+        assert!(gone.looks.items[..3].iter().all(|v| !v.shows()));
         let mut whole = Voxels::row(3, Some(BubbleState::Whole));
-        far.place(whole.run());
-        assert!(whole.visibilities.iter().all(|v| *v == Visibility::Inherited));
-        assert!(whole.visibility_ticks.iter().all(|t| *t == Tick::new(1)), "unchanged visibility marked changed");
-        let off_cell = whole.transforms[1].translation.distance(far.rotation * whole.homes[1].position);
+        whole.place(&far);
+        assert!(whole.looks.items[..3].iter().all(|v| v.shows()));
+        let off_cell = whole.looks.items[1].position().distance(far.rotation * whole.slots[1].home.position);
         assert!(off_cell > 1e-3 && off_cell < 0.3, "wobble {off_cell}");
     }
 }

@@ -7,16 +7,16 @@ use std::time::Duration;
 use bevy::prelude::*;
 use voxel_art::animation::{AnimationRequest, CellSlots, PoseJob};
 use voxel_art::config::AppArgs;
-use voxel_art::instancing::{Vacant, VoxelHome, VoxelPool};
+use voxel_art::instancing::VoxelPool;
 use voxel_art::library::LibraryRequest;
 use voxel_art::model::{ModelLibrary, Playback, VoxelModelAsset};
 use voxel_art::settings::VoxelSettings;
 use voxel_art::style::Style;
 use voxel_art::style::falling::FallingPile;
-use voxel_art::transition::{ActiveTransition, VoxelTween};
+use voxel_art::transition::ActiveTransition;
 
 use crate::common::models_dir;
-use crate::harness::{all_settled, app_options, run_until, test_app};
+use crate::harness::{all_settled, app_options, flights, looks, run_until, test_app};
 
 const LIMIT: Duration = Duration::from_secs(120);
 
@@ -48,11 +48,10 @@ fn following(app: &App) -> bool {
         && app.world().resource::<ActiveTransition>().running.is_none()
 }
 
-/// The cells shown (centre bits) and the entity showing each.
-fn shown_cells(app: &App) -> HashMap<[u32; 3], Entity> {
-    let pool = app.world().resource::<VoxelPool>();
+/// The cells shown (centre bits) and the pool slot showing each.
+fn shown_cells(app: &App) -> HashMap<[u32; 3], usize> {
     let slots = app.world().resource::<CellSlots>();
-    slots.cells().map(|(p, slot)| (p.to_array().map(f32::to_bits), pool.slots[slot as usize])).collect()
+    slots.cells().map(|(p, slot)| (p.to_array().map(f32::to_bits), slot as usize)).collect()
 }
 
 /// The cells of a model as shown (centre bits).
@@ -61,7 +60,7 @@ fn model_cells(model: &VoxelModelAsset, hollow: bool) -> HashSet<[u32; 3]> {
 }
 
 /// Steps until the pose placed last differs from `before` and is laid out.
-fn next_pose(app: &mut App, before: &HashMap<[u32; 3], Entity>) -> HashMap<[u32; 3], Entity> {
+fn next_pose(app: &mut App, before: &HashMap<[u32; 3], usize>) -> HashMap<[u32; 3], usize> {
     let mut after = HashMap::new();
     run_until(app, LIMIT, |app| {
         if !following(app) {
@@ -115,10 +114,11 @@ fn the_pose_shown_is_the_cores_pose_in_the_clips_grid() {
     let hollow = app.world().resource::<VoxelSettings>().hollow;
     let cells = shown_cells(&app);
     assert_eq!(cells.keys().copied().collect::<HashSet<_>>(), model_cells(&shown, hollow));
-    let homes: Vec<(Vec3, Entity)> = cells.iter().map(|(k, e)| (Vec3::from_array(k.map(f32::from_bits)), *e)).collect();
-    for (position, entity) in homes {
-        assert_eq!(app.world().get::<VoxelHome>(entity).unwrap().position, position);
-        assert_eq!(app.world().get::<Visibility>(entity), Some(&Visibility::Inherited));
+    let pool = app.world().resource::<VoxelPool>();
+    let looks = looks(&app);
+    for (key, slot) in cells {
+        assert_eq!(pool.slots[slot].home.position, Vec3::from_array(key.map(f32::from_bits)));
+        assert!(looks[slot].shows(), "slot {slot} of a cell hidden");
     }
 }
 
@@ -146,11 +146,11 @@ fn new_poses_change_cells_in_one_grid_and_cells_that_stay_keep_their_voxel() {
         assert_eq!(first[k], second[k], "a cell filled in both poses changed its voxel");
     }
     // Every cell shown has its own voxel, and a voxel that left its cell is vacant (after its pop-out).
-    let entities: HashSet<Entity> = second.values().copied().collect();
-    assert_eq!(entities.len(), second.len());
-    let mut vacant = app.world_mut().query_filtered::<Entity, With<Vacant>>();
-    let vacant: Vec<Entity> = vacant.iter(app.world()).collect();
-    assert!(vacant.iter().all(|e| !entities.contains(e)));
+    let used: HashSet<usize> = second.values().copied().collect();
+    assert_eq!(used.len(), second.len());
+    let pool = app.world().resource::<VoxelPool>();
+    let vacant: Vec<usize> = (0..pool.slots.len()).filter(|s| pool.slots[*s].vacant).collect();
+    assert!(vacant.iter().all(|s| !used.contains(s)));
     assert!(vacant.len() >= emptied.saturating_sub(appeared), "{} vacant, {emptied} emptied", vacant.len());
 }
 
@@ -218,12 +218,11 @@ fn a_morph_to_another_model_starts_from_the_current_pose() {
     app.world_mut().write_message(LibraryRequest::Select(1));
     app.update();
     // Every voxel of the pose takes off from its cell (the morph plans from where the voxels are).
-    let mut flights = app.world_mut().query::<(Entity, &VoxelTween)>();
-    let from: HashMap<Entity, Vec3> = flights.iter(app.world()).map(|(e, t)| (e, t.from)).collect();
+    let from: HashMap<usize, Vec3> = flights(&app).into_iter().map(|(s, t)| (s, t.from)).collect();
     assert!(from.len() >= cells.len(), "{} flights for {} cells", from.len(), cells.len());
-    for (cell, entity) in &cells {
+    for (cell, slot) in &cells {
         let home = Vec3::from_array(cell.map(f32::from_bits));
-        assert!(from[entity].distance(home) < 1e-4, "a voxel of the pose started away from its cell");
+        assert!(from[slot].distance(home) < 1e-4, "a voxel of the pose started away from its cell");
     }
 }
 
@@ -264,22 +263,18 @@ fn in_lego_and_bubbles_exactly_the_cells_show() {
         // Pause, let the last pops land, and give the style's placement some frames.
         app.world_mut().write_message(AnimationRequest::Play(false));
         run_until(&mut app, LIMIT, |app| {
-            let mut busy = app.world_mut().query_filtered::<(), Or<(With<PoseJob>, With<VoxelTween>)>>();
-            busy.iter(app.world()).next().is_none() && following(app)
+            let mut jobs = app.world_mut().query_filtered::<(), With<PoseJob>>();
+            jobs.iter(app.world()).next().is_none() && flights(app).is_empty() && following(app)
         });
         for _ in 0..30 {
             app.update();
         }
         let cells = shown_cells(&app);
-        for entity in cells.values() {
-            assert_eq!(
-                app.world().get::<Visibility>(*entity),
-                Some(&Visibility::Inherited),
-                "{style:?}: a cell hidden"
-            );
+        let looks = looks(&app);
+        for slot in cells.values() {
+            assert!(looks[*slot].shows(), "{style:?}: a cell hidden");
         }
-        let mut shown = app.world_mut().query_filtered::<&Visibility, With<VoxelHome>>();
-        let showing = shown.iter(app.world()).filter(|v| **v == Visibility::Inherited).count();
+        let showing = looks.iter().filter(|v| v.shows()).count();
         assert_eq!(showing, cells.len(), "{style:?}: voxels showing besides the cells (a vacant slot?)");
     }
 }

@@ -85,3 +85,29 @@ pub fn core_voxelize(path: &Path, options: &voxel_core::VoxelizeOptions) -> voxe
     let soup = voxel_core::load_file(path).unwrap();
     voxel_core::voxelize(&soup, options).unwrap()
 }
+
+/// Every pool slot's look (its place, box, colour; zero-sized when hidden), by slot.
+pub fn looks(app: &App) -> Vec<voxel_art::instancing::GpuVoxel> {
+    let slots = app.world().resource::<voxel_art::instancing::VoxelPool>().slots.len();
+    app.world().resource::<voxel_art::instancing::GpuVoxels>().items[..slots].to_vec()
+}
+
+/// The flights now: (slot, tween).
+pub fn flights(app: &App) -> Vec<(usize, voxel_art::instancing::VoxelTween)> {
+    let pool = app.world().resource::<voxel_art::instancing::VoxelPool>();
+    let tweens = app.world().resource::<voxel_art::instancing::VoxelTweens>();
+    tweens.flying(pool).map(|(slot, t)| (slot, *t)).collect()
+}
+
+/// Every pool slot as the GPU draws it this frame (its flight at the frame's clock, else its look).
+pub fn drawn(app: &App) -> Vec<voxel_art::instancing::GpuVoxel> {
+    let world = app.world();
+    let tweens = world.resource::<voxel_art::instancing::VoxelTweens>();
+    let clock = world.resource::<voxel_art::instancing::GpuClock>();
+    tweens.drawn(world.resource::<voxel_art::instancing::VoxelPool>(), &looks(app), clock)
+}
+
+/// The model's turn now (the cloud's rotation).
+pub fn turn(app: &App) -> voxel_art::instancing::Turn {
+    voxel_art::instancing::Turn::new(app.world().resource::<voxel_art::transition::ActiveTransition>().turn())
+}

@@ -6,6 +6,7 @@ mod big;
 mod cli;
 mod common;
 mod export;
+mod flight;
 mod harness;
 mod logic;
 mod modules;

@@ -10,7 +10,7 @@ use voxel_art::instancing::VoxelPool;
 use voxel_art::library::LibraryRequest;
 use voxel_art::model::{ModelLibrary, ModelStatus, VoxelModelAsset};
 use voxel_art::settings::{SettingDrag, VoxelSettings};
-use voxel_art::transition::{ActiveTransition, VoxelTween};
+use voxel_art::transition::ActiveTransition;
 use voxel_art::voxelize::{VoxelizeGeneration, VoxelizeJob};
 
 use crate::harness::{all_settled, app_options, core_voxelize, run_until, shipped, test_app};
@@ -46,8 +46,7 @@ fn current_placed(app: &mut App) -> bool {
     let Some(entry) = library.current_entry() else { return false };
     let shown = app.world().resource::<VoxelPool>().shown;
     let fresh = entry.voxels_generation == Some(latest) && entry.voxels.as_ref().map(|h| h.id()) == shown;
-    let mut tweens = app.world_mut().query::<&VoxelTween>();
-    fresh && tweens.iter(app.world()).next().is_none() && app.world().resource::<ActiveTransition>().running.is_none()
+    fresh && crate::harness::flights(app).is_empty() && app.world().resource::<ActiveTransition>().running.is_none()
 }
 
 /// The cell width of the model the pool shows.

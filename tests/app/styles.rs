@@ -4,15 +4,15 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
-use voxel_art::instancing::{VoxelCloud, VoxelHome, VoxelSlot};
+use voxel_art::instancing::{GpuVoxels, VoxelPool};
 use voxel_art::library::LibraryRequest;
 use voxel_art::settings::{RepelSettings, VoxelSettings};
 use voxel_art::style::CursorRay;
 use voxel_art::style::Style;
-use voxel_art::style::bubbles::{Bubble, BubbleSettings, BubbleState};
+use voxel_art::style::bubbles::{BubbleSettings, BubbleState, Bubbles};
 use voxel_art::style::falling::FallingPile;
 
-use crate::harness::{all_settled, run_until, test_app};
+use crate::harness::{all_settled, looks, run_until, test_app, turn};
 use crate::logic::shown_model;
 use crate::transition::{assert_shows_model, settle};
 
@@ -33,16 +33,13 @@ fn set_style(app: &mut App, style: Style) {
 }
 
 /// World position of a slot's home cell.
-fn home_world(app: &mut App, slot: u32) -> Vec3 {
-    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
-    let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelHome)>();
-    let home = q.iter(app.world()).find(|(s, _)| s.0 == slot).unwrap().1;
-    turn * home.position
+fn home_world(app: &mut App, slot: usize) -> Vec3 {
+    turn(app).rotation * app.world().resource::<VoxelPool>().slots[slot].home.position
 }
 
-fn translation(app: &mut App, slot: u32) -> Vec3 {
-    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform), Without<VoxelCloud>>();
-    q.iter(app.world()).find(|(s, _)| s.0 == slot).unwrap().1.translation
+/// World position of a slot's voxel now.
+fn translation(app: &mut App, slot: usize) -> Vec3 {
+    app.world().resource::<GpuVoxels>().items[slot].position()
 }
 
 fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
@@ -76,16 +73,17 @@ fn drop_pile(seed_runs: usize) -> Vec<Vec3> {
     assert!(top > 2.0 * size, "the heap is {top} high, {} cells", top / size);
     // The pile lies under the model.
     let model = shown_model(&app).unwrap();
-    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
+    let turn = turn(&app).rotation;
     let model_com = model.voxels().map(|v| turn * Vec3::from(model.center(&v))).sum::<Vec3>() / model.len() as f32;
     let pile_com = pile.positions.iter().sum::<Vec3>() / pile.positions.len() as f32;
     let sideways = Vec2::new(pile_com.x - model_com.x, pile_com.z - model_com.z).length();
     assert!(sideways < 1.0, "the pile's centre is {sideways} from under the model's");
     assert!(pile_com.y < model_com.y);
     // Drawn where simulated.
-    let mut q = app.world_mut().query::<(&voxel_art::style::falling::Falling, &GlobalTransform)>();
-    for (falling, global) in q.iter(app.world()) {
-        assert!(global.translation().distance(pile.positions[falling.0 as usize]) < 1e-5);
+    let falling = app.world().resource::<FallingPile>().voxels.clone();
+    assert_eq!(falling.len(), pile.positions.len(), "a body per voxel below the cap");
+    for v in falling {
+        assert!(translation(&mut app, v.slot as usize).distance(pile.positions[v.body as usize]) < 1e-5);
     }
     // F calls them back to their cells.
     app.world_mut().resource_mut::<ButtonInput<KeyCode>>().press(KeyCode::KeyF);
@@ -104,45 +102,30 @@ fn falling_voxels_pile_up_at_rest_and_reassemble() {
     assert_eq!(first, again, "the same seed gives the same pile");
 }
 
-/// Voxels whose `GlobalTransform` changed in the last frame (what the renderer re-extracts).
-#[derive(Resource, Default)]
-struct Replaced(usize);
-
-fn count_replaced(voxels: Query<(), (With<VoxelSlot>, Changed<GlobalTransform>)>, mut replaced: ResMut<Replaced>) {
-    replaced.0 = voxels.iter().count();
+/// Voxels in the chunks uploaded for the last frame (the chunks whose looks changed).
+fn uploaded(app: &App) -> usize {
+    app.world().resource::<GpuVoxels>().dirty_ranges().iter().map(|(start, end)| end - start).sum()
 }
 
 #[test]
 fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     let mut app = cherry_app();
-    app.init_resource::<Replaced>().add_systems(Last, count_replaced);
     let (radius, strength) = {
         let s = app.world().resource::<RepelSettings>();
         (s.radius, s.strength)
     };
     let target = home_world(&mut app, 0);
-    let far_slot = {
-        let mut q = app.world_mut().query::<&VoxelSlot>();
-        let slots: Vec<u32> = q
-            .iter(app.world())
-            .map(|s| s.0)
-            .filter(|s| (*s as usize) < app.world().resource::<voxel_art::instancing::VoxelPool>().visible)
-            .collect();
-        *slots
-            .iter()
-            .max_by(|a, b| {
-                home_world(&mut app, **a).distance(target).total_cmp(&home_world(&mut app, **b).distance(target))
-            })
-            .unwrap()
-    };
+    let far_slot = (0..app.world().resource::<VoxelPool>().visible)
+        .max_by(|a, b| home_world(&mut app, *a).distance(target).total_cmp(&home_world(&mut app, *b).distance(target)))
+        .unwrap();
     let far_before = translation(&mut app, far_slot);
     app.insert_resource(CursorRay(Some(Ray3d::new(target + Vec3::Z * 20.0, Dir3::NEG_Z))));
     app.update();
-    assert!(app.world().resource::<Replaced>().0 > 0, "pushed voxels were not marked changed for the renderer");
+    assert!(uploaded(&app) > 0, "pushed voxels were not uploaded");
     for _ in 0..59 {
         app.update();
     }
-    assert_eq!(app.world().resource::<Replaced>().0, 0, "voxels held by a still cursor still rewritten every frame");
+    assert_eq!(uploaded(&app), 0, "voxels held by a still cursor still rewritten every frame");
     let pushed = translation(&mut app, 0).distance(target);
     assert!(pushed >= 0.9 * radius * strength, "pushed {pushed}, expected about {}", radius * strength);
     assert_eq!(translation(&mut app, far_slot), far_before, "a far voxel moved");
@@ -150,13 +133,9 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     for _ in 0..120 {
         app.update();
     }
-    assert_eq!(app.world().resource::<Replaced>().0, 0, "voxels at rest still rewritten every frame");
-    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
-    let shown: Vec<(u32, Vec3)> = q
-        .iter(app.world())
-        .filter(|(_, _, v)| **v != Visibility::Hidden)
-        .map(|(s, t, _)| (s.0, t.translation))
-        .collect();
+    assert_eq!(uploaded(&app), 0, "voxels at rest still rewritten every frame");
+    let shown: Vec<(usize, Vec3)> =
+        looks(&app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, v.position())).collect();
     for (slot, at) in shown {
         let home = home_world(&mut app, slot);
         assert!(at.distance(home) < 1e-3, "slot {slot} did not spring back ({})", at.distance(home));
@@ -172,10 +151,7 @@ fn a_burst_bubble_vanishes_and_reforms_at_its_cell() {
         app.update();
     }
     let timing = app.world().resource::<BubbleSettings>().clone();
-    let state = |app: &mut App| {
-        let mut q = app.world_mut().query::<(&VoxelSlot, &Bubble, &Visibility)>();
-        q.iter(app.world()).find(|(s, _, _)| s.0 == 0).map(|(_, b, v)| (b.state, *v)).unwrap()
-    };
+    let state = |app: &mut App| (app.world().resource::<Bubbles>().0[0].state, looks(app)[0].shows());
     assert_eq!(state(&mut app).0, BubbleState::Whole);
     let at = home_world(&mut app, 0);
     app.insert_resource(CursorRay(Some(Ray3d::new(at + Vec3::Z * 20.0, Dir3::NEG_Z))));
@@ -188,14 +164,14 @@ fn a_burst_bubble_vanishes_and_reforms_at_its_cell() {
     }
     let (s, visibility) = state(&mut app);
     assert!(matches!(s, BubbleState::Gone(_)), "{s:?}");
-    assert_eq!(visibility, Visibility::Hidden);
+    assert!(!visibility, "a burst bubble shows");
     let back_frames = ((timing.reform_max + timing.form) * 60.0).ceil() as usize + 2;
     for _ in 0..back_frames {
         app.update();
     }
     let (s, visibility) = state(&mut app);
     assert_eq!(s, BubbleState::Whole, "re-formed within the configured delay");
-    assert_eq!(visibility, Visibility::Inherited);
+    assert!(visibility, "a re-formed bubble is hidden");
     let cell = app.world().resource::<VoxelSettings>().grid_size;
     let drift = translation(&mut app, 0).distance(home_world(&mut app, 0));
     assert!(drift < cell, "the bubble wobbles around its cell ({drift})");
@@ -246,11 +222,15 @@ fn the_pool_wears_the_style_mesh_from_the_start_and_after_a_switch() {
     assert_eq!(pool_mesh_vertices(&app), Some(vertices(Style::RoundedBoxes)));
 }
 
-/// (voxels carrying component `C`, all voxels).
-fn count_with<C: Component>(app: &mut App) -> (usize, usize) {
-    let mut q = app.world_mut().query::<(&VoxelSlot, Has<C>)>();
-    let all: Vec<bool> = q.iter(app.world()).map(|(_, has)| has).collect();
-    (all.iter().filter(|h| **h).count(), all.len())
+/// (slots with a bubble, all slots).
+fn bubbles_on_slots(app: &App) -> (usize, usize) {
+    let bubbles = app.world().get_resource::<Bubbles>().map_or(0, |b| b.0.len());
+    (bubbles, app.world().resource::<VoxelPool>().slots.len())
+}
+
+/// Slots in the falling pile.
+fn falling(app: &App) -> usize {
+    app.world().resource::<VoxelPool>().slots.iter().filter(|s| s.falling).count()
 }
 
 #[test]
@@ -259,7 +239,7 @@ fn bubbles_come_on_entering_the_style_and_leave_every_voxel_on_its_cell() {
     app.world_mut().resource_mut::<RepelSettings>().enabled = false;
     set_style(&mut app, Style::Bubbles);
     app.update();
-    let (bubbles, voxels) = count_with::<Bubble>(&mut app);
+    let (bubbles, voxels) = bubbles_on_slots(&app);
     assert!(voxels > 500 && bubbles == voxels, "{bubbles} bubbles on {voxels} voxels");
     // Burst the bubbles under the cursor and let the rest wobble off their cells.
     let at = home_world(&mut app, 0);
@@ -269,15 +249,14 @@ fn bubbles_come_on_entering_the_style_and_leave_every_voxel_on_its_cell() {
     }
     app.insert_resource(CursorRay(None));
     let hidden = {
-        let pool = app.world().resource::<voxel_art::instancing::VoxelPool>().visible;
-        let mut q = app.world_mut().query::<(&VoxelSlot, &Visibility)>();
-        q.iter(app.world()).filter(|(s, v)| (s.0 as usize) < pool && **v == Visibility::Hidden).count()
+        let pool = app.world().resource::<VoxelPool>().visible;
+        looks(&app)[..pool].iter().filter(|v| !v.shows()).count()
     };
     assert!(hidden > 0, "no bubble burst");
     assert!(translation(&mut app, 1).distance(home_world(&mut app, 1)) > 1e-3, "bubbles do not wobble");
     set_style(&mut app, Style::RoundedBoxes);
     app.update();
-    assert_eq!(count_with::<Bubble>(&mut app).0, 0, "bubbles left behind");
+    assert_eq!(bubbles_on_slots(&app).0, 0, "bubbles left behind");
     // Every voxel is back on its cell, shown, at its size.
     assert_shows_model(&mut app);
 }
@@ -290,14 +269,14 @@ fn falling_lets_go_on_entering_the_style_and_reassembles_on_leaving() {
         app.update();
     }
     let solid = shown_model(&app).unwrap().stats.voxels;
-    assert_eq!(count_with::<voxel_art::style::falling::Falling>(&mut app).0, solid, "every solid voxel falls");
+    assert_eq!(falling(&app), solid, "every solid voxel falls");
     for _ in 0..60 {
         app.update();
     }
     set_style(&mut app, Style::Lego);
     app.update();
     assert!(app.world().get_resource::<FallingPile>().is_none(), "the pile outlived the style");
-    assert_eq!(count_with::<voxel_art::style::falling::Falling>(&mut app).0, 0);
+    assert_eq!(falling(&app), 0);
     run_until(&mut app, Duration::from_secs(60), |app| {
         shown_model(app).is_some_and(|m| (m.spec.cell[1] / m.spec.cell[0] - 1.2).abs() < 1e-5)
     });

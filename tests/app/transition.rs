@@ -3,28 +3,24 @@
 use std::collections::HashMap;
 use std::time::Duration;
 
-use bevy::mesh::MeshTag;
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
-use voxel_art::instancing::{VoxelCloud, VoxelPool, VoxelSlot, unpack_color, voxel_transform};
+use voxel_art::instancing::VoxelTween;
+use voxel_art::instancing::{VoxelCloud, VoxelPool, unpack_color};
 use voxel_art::library::LibraryRequest;
 use voxel_art::settings::VoxelSettings;
-use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, VoxelTween, layout};
+use voxel_art::transition::{ActiveTransition, TransitionFinished, TransitionSettings, layout};
 
-use crate::harness::{all_settled, run_until, test_app};
+use crate::harness::{all_settled, drawn, flights, looks, run_until, test_app, turn};
 use crate::logic::shown_model;
 
 /// Steps until no voxel carries a tween (at most 10 s of app time).
 pub fn settle(app: &mut App) {
     for _ in 0..600 {
         app.update();
-        let mut tweens = app.world_mut().query::<&VoxelTween>();
         let shown = app.world().resource::<VoxelPool>().shown;
         let wanted = shown_model(app).is_some() && shown.is_some();
-        if wanted
-            && tweens.iter(app.world()).next().is_none()
-            && app.world().resource::<ActiveTransition>().running.is_none()
-        {
+        if wanted && flights(app).is_empty() && app.world().resource::<ActiveTransition>().running.is_none() {
             return;
         }
     }
@@ -38,27 +34,22 @@ pub fn assert_shows_model(app: &mut App) -> usize {
     let settings = app.world().resource::<VoxelSettings>().clone();
     let transition = app.world().resource::<TransitionSettings>().clone();
     let targets = layout(&model, &settings, &transition);
-    let turn = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
-    let mut query = app
-        .world_mut()
-        .query_filtered::<(&VoxelSlot, &Transform, &GlobalTransform, &MeshTag, &Visibility), Without<VoxelCloud>>();
+    let cloud = app.world_mut().query_filtered::<&Transform, With<VoxelCloud>>().single(app.world()).unwrap().rotation;
+    let turn = turn(app);
+    assert_eq!(cloud, turn.rotation, "the cloud turns with the voxels");
     let mut hidden = 0;
-    for (slot, transform, global, tag, visibility) in query.iter(app.world()) {
-        match targets.get(slot.0 as usize) {
+    for (slot, look) in looks(app).iter().enumerate() {
+        match targets.get(slot) {
             Some(t) => {
-                assert_eq!(*visibility, Visibility::Inherited, "slot {} hidden", slot.0);
-                let expected = voxel_transform(turn, t.position, t.scale);
-                assert!(transform.translation.distance(expected.translation) < 1e-4, "slot {} not on its cell", slot.0);
-                assert!(
-                    global.translation().distance(expected.translation) < 1e-4,
-                    "slot {} drawn off its cell",
-                    slot.0
-                );
-                assert_eq!(transform.scale, t.scale);
-                assert_eq!(unpack_color(tag.0), t.color, "slot {} colour", slot.0);
+                assert!(look.shows(), "slot {slot} hidden");
+                let expected = turn.place(t.position, t.scale, 0);
+                assert!(look.position().distance(expected.position()) < 1e-4, "slot {slot} not on its cell");
+                assert!(look.scale().distance(t.scale) < 1e-5, "slot {slot} box {} for {}", look.scale(), t.scale);
+                assert_eq!(look.x_axis, expected.x_axis, "slot {slot} turned");
+                assert_eq!(unpack_color(look.color), t.color, "slot {slot} colour");
             }
             None => {
-                assert_eq!(*visibility, Visibility::Hidden, "spare slot {} shows", slot.0);
+                assert!(!look.shows(), "spare slot {slot} shows");
                 hidden += 1;
             }
         }
@@ -74,20 +65,10 @@ fn ready_app() -> App {
     app
 }
 
-/// Positions of the visible voxels in the cloud's (model) frame.
-fn positions(app: &mut App) -> HashMap<u32, Vec3> {
-    let unturn = app
-        .world_mut()
-        .query_filtered::<&Transform, With<VoxelCloud>>()
-        .single(app.world())
-        .unwrap()
-        .rotation
-        .inverse();
-    let mut q = app.world_mut().query_filtered::<(&VoxelSlot, &Transform, &Visibility), Without<VoxelCloud>>();
-    q.iter(app.world())
-        .filter(|(_, _, v)| **v != Visibility::Hidden)
-        .map(|(s, t, _)| (s.0, unturn * t.translation))
-        .collect()
+/// Positions of the visible voxels in the cloud's (model) frame, as drawn.
+fn positions(app: &mut App) -> HashMap<usize, Vec3> {
+    let turn = turn(app);
+    drawn(app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, turn.unturn(v.position()))).collect()
 }
 
 #[test]
@@ -107,13 +88,11 @@ fn after_the_longest_delay_and_duration_every_voxel_is_home() {
     for k in 0..frames {
         app.update();
         if k == 20 {
-            let mut tweens = app.world_mut().query::<&VoxelTween>();
-            moving = tweens.iter(app.world()).count();
+            moving = flights(&app).len();
         }
     }
     assert!(moving > 100, "voxels were tweening mid-way ({moving})");
-    let mut tweens = app.world_mut().query::<&VoxelTween>();
-    assert_eq!(tweens.iter(app.world()).count(), 0, "finished tweens are removed");
+    assert_eq!(flights(&app).len(), 0, "finished tweens land");
     assert_shows_model(&mut app);
     assert_eq!(app.world().resource::<Finished>().0, 1, "TransitionFinished was sent once");
 }
@@ -133,15 +112,11 @@ fn a_second_switch_half_way_starts_from_where_voxels_are() {
         app.update();
     }
     let before = positions(&mut app);
-    let old_bounds: HashMap<u32, f32> = {
-        let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelTween)>();
-        q.iter(app.world()).map(|(s, t)| (s.0, bound(t))).collect()
-    };
+    let old_bounds: HashMap<usize, f32> = flights(&app).iter().map(|(s, t)| (*s, bound(t))).collect();
     app.world_mut().write_message(LibraryRequest::Next);
     app.update();
     let after = positions(&mut app);
-    let mut q = app.world_mut().query::<(&VoxelSlot, &VoxelTween)>();
-    let new_bounds: HashMap<u32, f32> = q.iter(app.world()).map(|(s, t)| (s.0, bound(t))).collect();
+    let new_bounds: HashMap<usize, f32> = flights(&app).iter().map(|(s, t)| (*s, bound(t))).collect();
     let dt = 1.0 / 60.0;
     assert!(after.len() > 500);
     for (slot, p) in after.iter().filter(|(slot, _)| before.contains_key(*slot)) {
@@ -163,19 +138,16 @@ fn bound(t: &VoxelTween) -> f32 {
 #[test]
 fn rapid_switching_keeps_entities_and_tweens_bounded() {
     let mut app = ready_app();
-    let entities_before = app.world().entities().count_spawned() as usize;
-    let pool_before = app.world().resource::<VoxelPool>().slots.len();
+    let entities_before = app.world().entities().count_spawned();
     for _ in 0..20 {
         app.world_mut().write_message(LibraryRequest::Next);
         app.update();
         app.update();
         let pool = app.world().resource::<VoxelPool>().slots.len();
-        let mut tweens = app.world_mut().query::<&VoxelTween>();
-        assert!(tweens.iter(app.world()).count() <= pool);
+        assert!(flights(&app).len() <= pool);
     }
-    // Only pool growth (a bigger model) adds entities; tweens are components, not entities.
-    let pool_after = app.world().resource::<VoxelPool>().slots.len();
-    assert_eq!(app.world().entities().count_spawned() as usize, entities_before + pool_after - pool_before);
+    // Voxels are slots, not entities: switching spawns none (the two model-level tweens are replaced).
+    assert_eq!(app.world().entities().count_spawned(), entities_before);
     settle(&mut app);
     assert_shows_model(&mut app);
 }
@@ -201,8 +173,7 @@ fn the_spin_and_the_visible_count_follow_their_model_level_tweens() {
         let count = old + (new - old) * (s / t.count_duration).min(1.0);
         assert!((active.shown - count).abs() < 0.01 * (new - old).abs() + 1.0, "frame {k}: count {}", active.shown);
         let shown = active.shown;
-        let mut voxels = app.world_mut().query::<&Visibility>();
-        let visible = voxels.iter(app.world()).filter(|v| **v == Visibility::Inherited).count() as f32;
+        let visible = drawn(&app).iter().filter(|v| v.shows()).count() as f32;
         assert!((visible - shown).abs() <= 1.0, "frame {k}: {visible} voxels show for a count of {shown}");
         let mut tweens = app.world_mut().query::<&ModelTween>();
         assert!(tweens.iter(app.world()).count() <= 2, "model-level tweens are replaced, never stacked");

@@ -1,0 +1,77 @@
+// A voxel and its flight, evaluated on the GPU: the morph's per-voxel tween (back-out flight, colour switch,
+// visible count, the model's spin) as a function of the flight clock. Plain WGSL with no bindings, imported by
+// voxel_common.wgsl and, in the tests, run in a compute pass against the Rust curve (`transition::flown`).
+
+// One voxel's look (32 bytes, `GpuVoxel` in src/instancing/gpu.rs). Voxels only turn about y: the box's x axis
+// in the xz plane (width × (cos, −sin)), its height and its depth place it; a hidden voxel has no size.
+struct Voxel {
+    translation: vec3<f32>,
+    color: u32,
+    x_axis: vec2<f32>,
+    scale_y: f32,
+    scale_z: f32,
+}
+
+// One voxel's flight (96 bytes, `VoxelTween` in src/transition.rs): from and to in the model's frame, seconds
+// after `start` on the flight clock.
+struct Flight {
+    from_position: vec3<f32>,
+    delay: f32,
+    to_position: vec3<f32>,
+    duration: f32,
+    from_scale: vec3<f32>,
+    color_delay: f32,
+    to_scale: vec3<f32>,
+    color_duration: f32,
+    color_from: u32,
+    color_to: u32,
+    start: f32,
+    end: f32,
+    overshoot: f32,
+    show: u32,
+    spare_a: u32,
+    spare_b: u32,
+}
+
+// The flight clock of the frame (`FlightClock` in src/transition.rs): seconds, the model's angle about y and the
+// visible count.
+struct Clock {
+    time: f32,
+    angle: f32,
+    shown: f32,
+    spare: f32,
+}
+
+// `Flight::show`: the visible count decides, shown throughout, shown until the end.
+const SHOW_COUNT: u32 = 0u;
+
+// Back-out easing with overshoot `s`.
+fn back_out(t: f32, s: f32) -> f32 {
+    let u = clamp(t, 0.0, 1.0) - 1.0;
+    return 1.0 + (s + 1.0) * u * u * u + s * u * u;
+}
+
+// Voxel `slot` as drawn at `clock`: its flight while it lasts, else its look.
+fn flown(look: Voxel, f: Flight, slot: u32, clock: Clock) -> Voxel {
+    let elapsed = clock.time - f.start;
+    if !(elapsed < f.end) {
+        return look;
+    }
+    let k = back_out((elapsed - f.delay) / max(f.duration, 1e-6), f.overshoot);
+    let position = mix(f.from_position, f.to_position, vec3(k));
+    let scale = mix(f.from_scale, f.to_scale, vec3(clamp(k, 0.0, 1.0)));
+    let t = clamp((elapsed - f.color_delay) / max(f.color_duration, 1e-6), 0.0, 1.0);
+    let rgba = round(mix(unpack4x8unorm(f.color_from), unpack4x8unorm(f.color_to), vec4(t)) * 255.0) / 255.0;
+    let shows = f.show != SHOW_COUNT || f32(slot) < clock.shown;
+    let c = cos(clock.angle);
+    let s = sin(clock.angle);
+    var v: Voxel;
+    v.translation = vec3(c * position.x + s * position.z, position.y, c * position.z - s * position.x);
+    v.color = pack4x8unorm(rgba);
+    if shows {
+        v.x_axis = vec2(c, -s) * scale.x;
+        v.scale_y = scale.y;
+        v.scale_z = scale.z;
+    }
+    return v;
+}
