@@ -159,7 +159,7 @@ pub struct TriangleSoup {
     positions: Vec<[f32; 3]>,
     /// Linear RGBA colour of each vertex.
     colors: Vec<[f32; 4]>,
-    /// Texture coordinate of each vertex.
+    /// Texture coordinate of each vertex; empty while no vertex has one (all 0).
     uvs: Vec<[f32; 2]>,
     /// Three vertex indices a triangle.
     triangles: Vec<[u32; 3]>,
@@ -210,7 +210,7 @@ fn extend_attribute<T: Copy + Send + Sync>(
 ) {
     match (values, used) {
         (Some(values), None) => list.extend_from_slice(values),
-        (Some(values), Some(used)) => list.par_extend(used.par_iter().map(|&i| values[i as usize])),
+        (Some(values), Some(used)) => list.extend(used.iter().map(|&i| values[i as usize])),
         (None, _) => list.resize(list.len() + count, absent),
     }
 }
@@ -232,11 +232,13 @@ impl TriangleSoup {
     pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
         self.position_cache.clear();
         let first = self.positions.len() as u32;
-        for v in corners {
-            self.positions.push(v.position);
-            self.colors.push(v.color);
-            self.uvs.push(v.uv);
+        let uvs = corners.map(|v| v.uv);
+        if uvs != [[0.0; 2]; 3] || !self.uvs.is_empty() {
+            self.uvs.resize(self.positions.len(), [0.0; 2]);
+            self.uvs.extend(uvs);
         }
+        self.positions.extend(corners.map(|v| v.position));
+        self.colors.extend(corners.map(|v| v.color));
         self.triangles.push([first, first + 1, first + 2]);
         self.triangle_parts.push(part);
     }
@@ -267,15 +269,20 @@ impl TriangleSoup {
         &mut self.colors
     }
 
-    /// The texture coordinate of every vertex (0 where the file has none).
-    pub fn uvs(&self) -> &[[f32; 2]] {
-        &self.uvs
-    }
-
     /// Vertex `i`.
     #[inline]
     pub fn vertex(&self, i: usize) -> Vertex {
-        Vertex { position: self.positions[i], uv: self.uvs[i], color: self.colors[i] }
+        Vertex { position: self.positions[i], uv: self.uvs.get(i).copied().unwrap_or_default(), color: self.colors[i] }
+    }
+
+    /// Appends the texture coordinates of `count` new vertices (`values`, all or those at `used`; none: 0), before
+    /// their positions: the list stays empty while no vertex has one.
+    fn extend_uvs(&mut self, values: Option<&[[f32; 2]]>, used: Option<&[u32]>, count: usize) {
+        if values.is_none() && self.uvs.is_empty() {
+            return;
+        }
+        self.uvs.resize(self.positions.len(), [0.0; 2]);
+        extend_attribute(&mut self.uvs, values, used, count, [0.0; 2]);
     }
 
     /// The three vertex indices of every triangle.
@@ -317,13 +324,13 @@ impl TriangleSoup {
         self.position_cache.clear();
         let base = self.positions.len() as u32;
         let count = vertices.used.map_or(vertices.positions.len(), <[u32]>::len);
+        self.extend_uvs(vertices.uvs, vertices.used, count);
         extend_attribute(&mut self.positions, Some(vertices.positions), vertices.used, count, [0.0; 3]);
         extend_attribute(&mut self.colors, vertices.colors, vertices.used, count, [1.0; 4]);
-        extend_attribute(&mut self.uvs, vertices.uvs, vertices.used, count, [0.0; 2]);
         if base == 0 {
             self.triangles.extend_from_slice(triangles);
         } else {
-            self.triangles.par_extend(triangles.par_iter().map(|t| t.map(|i| base + i)));
+            self.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
         }
         self.triangle_parts.resize(self.triangle_parts.len() + triangles.len(), part);
     }
@@ -370,7 +377,7 @@ impl TriangleSoup {
         let vertices = self.positions.len();
         if self.triangles.len() != self.triangle_parts.len()
             || self.colors.len() != vertices
-            || self.uvs.len() != vertices
+            || !(self.uvs.is_empty() || self.uvs.len() == vertices)
         {
             return Err(VoxelError::Invalid("the triangle or vertex lists differ in length".into()));
         }
