@@ -224,6 +224,39 @@ fn malformed_animation_data_is_an_error_and_the_static_import_still_works() {
     assert!(err.to_string().contains("animation turn channel 0: 3 keyframes need 12 output values, found 8"), "{err}");
 }
 
+#[test]
+fn a_primitive_that_uses_some_of_its_vertices_poses_just_those() {
+    // The cube's vertices, but only its top face's two triangles (z = 1): four of the eight vertices used,
+    // morphed +1 along x where x = 1 and moved by the node's translation.
+    let mut b = Buffers::default();
+    let (pos, _, corners) = b.cube();
+    let top: Vec<u16> = (0..corners.len() as u16).filter(|&i| corners[usize::from(i)][2] == 1.0).collect();
+    let top = b.shorts(&[top[0], top[1], top[3], top[0], top[3], top[2]], "SCALAR", 1);
+    let deltas: Vec<f32> = corners.iter().flat_map(|p| [p[0], 0.0, 0.0]).collect();
+    let deltas = b.floats(&deltas, "VEC3", 3);
+    let times = b.floats(&[0.0, 2.0], "SCALAR", 1);
+    let weights = b.floats(&[1.0, 1.0], "SCALAR", 1);
+    let translations = b.floats(&[0.0, 0.0, 0.0, 4.0, 0.0, 0.0], "VEC3", 3);
+    let bytes = b.glb(json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": top, "targets": [{"POSITION": deltas}]}], "weights": [0.0]}],
+        "animations": [{"channels": [
+            {"sampler": 0, "target": {"node": 0, "path": "weights"}},
+            {"sampler": 1, "target": {"node": 0, "path": "translation"}}
+        ], "samplers": [{"input": times, "output": weights}, {"input": times, "output": translations}]}]
+    }));
+    let mut model = load_animated_slice(&bytes, None).unwrap();
+    let rest = model.rest_soup().clone();
+    assert_eq!((rest.vertex_count(), rest.triangle_count()), (4, 2));
+    assert!(rest.positions().iter().all(|p| p[2] == 1.0), "{:?}", rest.positions());
+    let posed = pose(&mut model, 0, 1.0);
+    for (r, p) in positions(&rest).iter().zip(positions(&posed)) {
+        assert_close(p, [r[0] + r[0] + 2.0, r[1], r[2]], "posed corner");
+    }
+}
+
 /// A cube on node 0 with one morph target (+1 along x for the corners at x = 1) and a translation, both
 /// animated by clip 0: weights 0 → 1 (STEP at t = 1), translation (0,0,0) → (4,0,0) linear over 2 s.
 pub(crate) fn morph_cube(scale_keys: Option<[f32; 9]>) -> Vec<u8> {
