@@ -201,7 +201,7 @@ impl std::fmt::Debug for PositionCache {
 }
 
 /// Appends `values` to `list` (all of them, or those at `used`), or `count` copies of `absent` without values.
-fn extend_attribute<T: Copy + Send + Sync>(
+fn extend_attribute<T: Copy>(
     list: &mut Vec<T>,
     values: Option<&[T]>,
     used: Option<&[u32]>,
