@@ -201,13 +201,7 @@ impl std::fmt::Debug for PositionCache {
 }
 
 /// Appends `values` to `list` (all of them, or those at `used`), or `count` copies of `absent` without values.
-fn extend_attribute<T: Copy>(
-    list: &mut Vec<T>,
-    values: Option<&[T]>,
-    used: Option<&[u32]>,
-    count: usize,
-    absent: T,
-) {
+fn extend_attribute<T: Copy>(list: &mut Vec<T>, values: Option<&[T]>, used: Option<&[u32]>, count: usize, absent: T) {
     match (values, used) {
         (Some(values), None) => list.extend_from_slice(values),
         (Some(values), Some(used)) => list.extend(used.iter().map(|&i| values[i as usize])),
