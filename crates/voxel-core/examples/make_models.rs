@@ -73,9 +73,8 @@ fn donut() -> TriangleSoup {
     soup.add_mesh(&body, [1.0; 4], "donut");
     let (dough, icing) = (rgb(0xd9a066), rgb(0xf48fb1));
     // The donut is the soup's only part so far.
-    for v in soup.vertices_mut() {
-        v.color = if v.position[1] > 0.12 { icing } else { dough };
-    }
+    let colors: Vec<[f32; 4]> = soup.positions().iter().map(|p| if p[1] > 0.12 { icing } else { dough }).collect();
+    soup.colors_mut().copy_from_slice(&colors);
     let sprinkle_colors = [0xffffff, 0x4fc3f7, 0xffee58, 0x81c784, 0xba68c8];
     for k in 0..14 {
         let a = k as f32 * 0.45 + 0.2;

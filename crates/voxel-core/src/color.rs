@@ -107,7 +107,7 @@ fn round_to_u8(x: f32) -> u8 {
 /// The colour of triangle `t` at barycentric weights `w`: base colour factor × COLOR_0 × base-colour
 /// texture, as sRGB RGBA8.
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
-    let [a, b, c] = [0, 1, 2].map(|k| &soup.triangle(t)[k]);
+    let [a, b, c] = soup.triangle(t);
     let material = soup.material_of(t);
     let [w0, w1, w2] = w.map(|w| w as f32);
     // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).

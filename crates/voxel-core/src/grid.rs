@@ -225,10 +225,8 @@ impl GridSpec {
 
     /// Every triangle of `soup` in grid coordinates.
     pub fn grid_triangles(&self, soup: &TriangleSoup) -> Vec<GridTriangle> {
-        soup.vertices()
-            .par_chunks_exact(3)
-            .map(|t| [self.to_grid(t[0].position), self.to_grid(t[1].position), self.to_grid(t[2].position)])
-            .collect()
+        let positions = soup.positions();
+        soup.triangles().par_iter().map(|t| t.map(|i| self.to_grid(positions[i as usize]))).collect()
     }
 }
 

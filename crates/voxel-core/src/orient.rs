@@ -127,8 +127,8 @@ pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicB
 /// analysis before the grid exists: the fill itself decides by its columns ([`winding_roles`]).
 fn facing_unbalanced(soup: &TriangleSoup) -> bool {
     let (mut net, mut total) = (0.0f64, 0.0f64);
-    for t in soup.vertices().chunks_exact(3) {
-        let [a, b, c] = [t[0].position, t[1].position, t[2].position];
+    for t in 0..soup.triangle_count() {
+        let [a, b, c] = soup.triangle_positions(t);
         // Differences of nearby f32 coordinates are exact; their products are exact in f64.
         let d = |p: [f32; 3], axis: usize| f64::from(p[axis] - a[axis]);
         let twice_area = d(b, 0) * d(c, 1) - d(b, 1) * d(c, 0);

@@ -111,7 +111,7 @@ pub struct Part {
     pub name: String,
 }
 
-/// One corner of a triangle: world-space position plus the attributes colour sampling reads.
+/// One vertex: world-space position plus the attributes colour sampling reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vertex {
     /// World-space position.
@@ -137,52 +137,36 @@ pub(crate) struct IndexedVertices<'a> {
     pub uvs: Option<&'a [[f32; 2]]>,
     /// Linear RGBA colours, if any (else white).
     pub colors: Option<&'a [[f32; 4]]>,
+    /// The vertices the triangles use, ascending, when they do not use all (the triangles then index this
+    /// list); `None`: they use every vertex.
+    pub used: Option<&'a [u32]>,
 }
 
-impl IndexedVertices<'_> {
-    /// Vertex `i` as a corner.
-    #[inline]
-    fn corner(&self, i: usize) -> Vertex {
-        Vertex {
-            position: self.positions[i],
-            uv: self.uvs.map_or([0.0; 2], |u| u[i]),
-            color: self.colors.map_or([1.0; 4], |c| c[i]),
-        }
-    }
-}
-
-/// World-space triangles grouped into parts, with their materials.
+/// World-space triangles grouped into parts, with their materials: indexed vertices (positions, colours and
+/// texture coordinates in lists of their own, as a glTF primitive holds them) and three vertex indices a
+/// triangle. Every vertex is a corner of some triangle.
 ///
-/// The corners are read with [`TriangleSoup::vertices`] and changed only through
-/// [`TriangleSoup::vertices_mut`] and [`TriangleSoup::push_triangle`], so that what the soup keeps about its
-/// positions (its `PositionCache`: the winding fill's closed parts, found once for every grid) never outlives them.
+/// Positions change only through [`TriangleSoup::positions_mut`] and the `push` methods, so that what the soup
+/// keeps about them (its `PositionCache`: the winding fill's closed parts, found once for every grid) never
+/// outlives them.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleSoup {
     /// Materials referenced by parts.
     pub materials: Vec<Material>,
     /// Parts referenced by triangles.
     pub parts: Vec<Part>,
-    /// Three vertices per triangle.
-    vertices: Vec<Vertex>,
+    /// World-space position of each vertex.
+    positions: Vec<[f32; 3]>,
+    /// Linear RGBA colour of each vertex.
+    colors: Vec<[f32; 4]>,
+    /// Texture coordinate of each vertex; empty while no vertex has one (all 0).
+    uvs: Vec<[f32; 2]>,
+    /// Three vertex indices a triangle.
+    triangles: Vec<[u32; 3]>,
     /// The part of each triangle.
     pub triangle_parts: Vec<u32>,
-    /// What a pass derived from `vertices`' positions alone, found when first needed; emptied whenever they can
-    /// change.
+    /// What a pass derived from the positions alone, found when first needed; emptied whenever they can change.
     position_cache: PositionCache,
-    /// The indexed vertices the corners were read from, while every corner still has one; dropped whenever
-    /// the corners can change.
-    sources: Option<SourceVertices>,
-}
-
-/// The indexed vertices a soup's corners were read from (the glTF importer): corner `c` is at
-/// `positions[index[c]]`, bit for bit. The part analysis welds these positions, one per source vertex, instead
-/// of every corner (the FlightHelmet: 55,392 for 284,166 corners).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct SourceVertices {
-    /// The source vertices' positions.
-    pub positions: Vec<[f32; 3]>,
-    /// Each corner's source vertex.
-    pub index: Vec<u32>,
 }
 
 /// One value derived from a soup's positions alone, kept by the soup for every later voxelization: the
@@ -216,6 +200,15 @@ impl std::fmt::Debug for PositionCache {
     }
 }
 
+/// Appends `values` to `list` (all of them, or those at `used`), or `count` copies of `absent` without values.
+fn extend_attribute<T: Copy>(list: &mut Vec<T>, values: Option<&[T]>, used: Option<&[u32]>, count: usize, absent: T) {
+    match (values, used) {
+        (Some(values), None) => list.extend_from_slice(values),
+        (Some(values), Some(used)) => list.extend(used.iter().map(|&i| values[i as usize])),
+        (None, _) => list.resize(list.len() + count, absent),
+    }
+}
+
 impl TriangleSoup {
     /// Adds a material and returns its index.
     pub fn add_material(&mut self, material: Material) -> usize {
@@ -229,24 +222,83 @@ impl TriangleSoup {
         (self.parts.len() - 1) as u32
     }
 
-    /// Adds a triangle to part `part`.
+    /// Adds a triangle of three new vertices to part `part`.
     pub fn push_triangle(&mut self, part: u32, corners: [Vertex; 3]) {
-        self.sources = None;
         self.position_cache.clear();
-        self.vertices.extend_from_slice(&corners);
+        let first = self.positions.len() as u32;
+        let uvs = corners.map(|v| v.uv);
+        if uvs != [[0.0; 2]; 3] || !self.uvs.is_empty() {
+            self.uvs.resize(self.positions.len(), [0.0; 2]);
+            self.uvs.extend(uvs);
+        }
+        self.positions.extend(corners.map(|v| v.position));
+        self.colors.extend(corners.map(|v| v.color));
+        self.triangles.push([first, first + 1, first + 2]);
         self.triangle_parts.push(part);
     }
 
-    /// The corners, three per triangle.
-    pub fn vertices(&self) -> &[Vertex] {
-        &self.vertices
+    /// The number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
     }
 
-    /// The corners, to change (a new pose, an edited mesh): forgets what the soup knew about its positions.
-    pub fn vertices_mut(&mut self) -> &mut [Vertex] {
-        self.sources = None;
+    /// The world-space position of every vertex.
+    pub fn positions(&self) -> &[[f32; 3]] {
+        &self.positions
+    }
+
+    /// The positions, to change (a new pose, an edited mesh): forgets what the soup knew about them.
+    pub fn positions_mut(&mut self) -> &mut [[f32; 3]] {
         self.position_cache.clear();
-        &mut self.vertices
+        &mut self.positions
+    }
+
+    /// The linear RGBA colour of every vertex (white where the file has none).
+    pub fn colors(&self) -> &[[f32; 4]] {
+        &self.colors
+    }
+
+    /// The colours, to change.
+    pub fn colors_mut(&mut self) -> &mut [[f32; 4]] {
+        &mut self.colors
+    }
+
+    /// Vertex `i`.
+    #[inline]
+    pub fn vertex(&self, i: usize) -> Vertex {
+        Vertex { position: self.positions[i], uv: self.uvs.get(i).copied().unwrap_or_default(), color: self.colors[i] }
+    }
+
+    /// Appends the texture coordinates of `count` new vertices (`values`, all or those at `used`; none: 0), before
+    /// their positions: the list stays empty while no vertex has one.
+    fn extend_uvs(&mut self, values: Option<&[[f32; 2]]>, used: Option<&[u32]>, count: usize) {
+        if values.is_none() && self.uvs.is_empty() {
+            return;
+        }
+        self.uvs.resize(self.positions.len(), [0.0; 2]);
+        extend_attribute(&mut self.uvs, values, used, count, [0.0; 2]);
+    }
+
+    /// The three vertex indices of every triangle.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The three corners of triangle `t`.
+    #[inline]
+    pub fn triangle(&self, t: usize) -> [Vertex; 3] {
+        self.triangles[t].map(|i| self.vertex(i as usize))
+    }
+
+    /// The three corners' positions of triangle `t`.
+    #[inline]
+    pub fn triangle_positions(&self, t: usize) -> [[f32; 3]; 3] {
+        self.triangles[t].map(|i| self.positions[i as usize])
+    }
+
+    /// Every triangle's corners in turn, three a triangle.
+    pub fn corners(&self) -> impl ExactSizeIterator<Item = Vertex> + '_ {
+        self.triangles.as_flattened().iter().map(|&i| self.vertex(i as usize))
     }
 
     /// What a pass derived from the soup's positions alone and keeps for the next voxelization.
@@ -254,53 +306,27 @@ impl TriangleSoup {
         &self.position_cache
     }
 
-    /// Adds indexed source vertices at `positions` for the triangles pushed with [`Self::push_indexed_triangles`],
-    /// and returns the index of the first one. A soup that has corners without a source keeps no sources.
-    /// Keeps none (from then on) when a primitive brings more vertices than the `corners` it is about to add (a
-    /// large shared accessor: welding them would cost more than the corners), or past `u32` indices.
-    pub(crate) fn add_sources(&mut self, positions: &[[f32; 3]], corners: usize) -> u32 {
-        let sources = match &mut self.sources {
-            Some(sources) => sources,
-            None if self.vertices.is_empty() => self.sources.insert(SourceVertices::default()),
-            None => return 0,
-        };
-        let base = sources.positions.len();
-        if positions.len() > corners || u32::try_from(base + positions.len()).is_err() {
-            self.sources = None;
-            return 0;
-        }
-        sources.positions.extend_from_slice(positions);
-        base as u32
-    }
-
     /// Room for `triangles` more triangles.
     pub(crate) fn reserve_triangles(&mut self, triangles: usize) {
-        self.vertices.reserve(3 * triangles);
+        self.triangles.reserve(triangles);
         self.triangle_parts.reserve(triangles);
     }
 
-    /// Adds `triangles` (three indices into `vertices` each, checked in range by the caller) to part `part`:
-    /// the corners are read in parallel straight into the soup, and `vertices.positions` become their source
-    /// vertices ([`Self::add_sources`]).
+    /// Adds `vertices` (the used ones) and `triangles` (three indices into them each, checked in range by the
+    /// caller) to part `part`: the attribute lists are copied in bulk, the indices offset in parallel.
     pub(crate) fn push_indexed_triangles(&mut self, part: u32, vertices: &IndexedVertices<'_>, triangles: &[[u32; 3]]) {
-        let corners = triangles.as_flattened();
-        let base = self.add_sources(vertices.positions, corners.len());
         self.position_cache.clear();
-        self.vertices.par_extend(corners.par_iter().map(|&i| vertices.corner(i as usize)));
-        self.triangle_parts.resize(self.triangle_parts.len() + triangles.len(), part);
-        if let Some(sources) = &mut self.sources {
-            sources.index.par_extend(corners.par_iter().map(|&i| base + i));
+        let base = self.positions.len() as u32;
+        let count = vertices.used.map_or(vertices.positions.len(), <[u32]>::len);
+        self.extend_uvs(vertices.uvs, vertices.used, count);
+        extend_attribute(&mut self.positions, Some(vertices.positions), vertices.used, count, [0.0; 3]);
+        extend_attribute(&mut self.colors, vertices.colors, vertices.used, count, [1.0; 4]);
+        if base == 0 {
+            self.triangles.extend_from_slice(triangles);
+        } else {
+            self.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
         }
-    }
-
-    /// The source vertices of every corner, when the soup was built from indexed vertices only.
-    pub(crate) fn sources(&self) -> Option<&SourceVertices> {
-        let sources = self.sources.as_ref()?;
-        debug_assert_eq!(sources.index.len(), self.vertices.len(), "a corner without a source vertex");
-        debug_assert!(self.vertices.iter().zip(&sources.index).all(|(v, &i)| {
-            sources.positions.get(i as usize).is_some_and(|p| p.map(f32::to_bits) == v.position.map(f32::to_bits))
-        }));
-        Some(sources)
+        self.triangle_parts.resize(self.triangle_parts.len() + triangles.len(), part);
     }
 
     /// Builds a single-part soup from an indexed mesh with one flat linear-RGBA colour.
@@ -310,24 +336,26 @@ impl TriangleSoup {
         soup
     }
 
-    /// Adds an indexed mesh as a new part with its own flat linear-RGBA material; returns the part.
+    /// Adds an indexed mesh as a new part with its own flat linear-RGBA material; returns the part. Its vertices
+    /// that no triangle uses are left out.
     pub fn add_mesh(&mut self, mesh: &crate::shapes::IndexedMesh, base_color: [f32; 4], name: &str) -> u32 {
         let material = self.add_material(Material { base_color, texture: None });
         let part = self.add_part(material, name);
-        for t in &mesh.triangles {
-            self.push_triangle(part, t.map(|i| Vertex::at(mesh.positions[i as usize])));
-        }
+        let used = used_vertices(mesh.positions.len(), mesh.triangles.as_flattened());
+        let vertices = IndexedVertices {
+            positions: &mesh.positions,
+            uvs: None,
+            colors: None,
+            used: used.as_ref().map(|(used, _)| &used[..]),
+        };
+        let triangles = used.as_ref().map_or(&mesh.triangles[..], |(_, corners)| corners.as_chunks().0);
+        self.push_indexed_triangles(part, &vertices, triangles);
         part
     }
 
     /// The number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangle_parts.len()
-    }
-
-    /// The three corners of triangle `t`.
-    pub fn triangle(&self, t: usize) -> &[Vertex] {
-        &self.vertices[3 * t..3 * t + 3]
     }
 
     /// The material of triangle `t`.
@@ -340,12 +368,16 @@ impl TriangleSoup {
         if self.triangle_parts.is_empty() {
             return Err(VoxelError::Empty(String::new()));
         }
-        if self.vertices.len() != 3 * self.triangle_parts.len() {
-            return Err(VoxelError::Invalid("vertex count is not three per triangle".into()));
+        let vertices = self.positions.len();
+        if self.triangles.len() != self.triangle_parts.len()
+            || self.colors.len() != vertices
+            || !(self.uvs.is_empty() || self.uvs.len() == vertices)
+        {
+            return Err(VoxelError::Invalid("the triangle or vertex lists differ in length".into()));
         }
         let usable = |t: usize| {
             self.parts.get(self.triangle_parts[t] as usize).is_some_and(|p| p.material < self.materials.len())
-                && self.triangle(t).iter().all(|v| v.position.iter().all(|c| c.is_finite()))
+                && self.triangle_positions(t).as_flattened().iter().all(|c| c.is_finite())
         };
         let Some(t) = (0..self.triangle_count()).into_par_iter().with_min_len(1 << 14).find_first(|&t| !usable(t))
         else {
@@ -361,9 +393,9 @@ impl TriangleSoup {
         }
     }
 
-    /// The axis-aligned bounds (min, max) of all vertices; `None` when empty.
+    /// The axis-aligned bounds (min, max) of all vertices (every one a corner); `None` when empty.
     pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
-        let first = self.vertices.first()?.position;
+        let first = *self.positions.first()?;
         let grow = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: [f32; 3]| {
             for a in 0..3 {
                 lo[a] = lo[a].min(p[a]);
@@ -372,12 +404,29 @@ impl TriangleSoup {
             (lo, hi)
         };
         // Min and max of finite values do not depend on the order: chunks in parallel, then their bounds.
-        let chunks = self
-            .vertices
-            .par_chunks(1 << 16)
-            .map(|chunk| chunk.iter().fold((first, first), |bounds, v| grow(bounds, v.position)));
+        let chunks =
+            self.positions.par_chunks(1 << 16).map(|chunk| chunk.iter().fold((first, first), |b, &p| grow(b, p)));
         Some(chunks.reduce(|| (first, first), |a, b| grow(grow(a, b.0), b.1)))
     }
+}
+
+/// The vertices of `count` that `corners` (indices below `count`) use, ascending, and the corners re-indexed
+/// to that list; `None` when they use every vertex.
+pub(crate) fn used_vertices(count: usize, corners: &[u32]) -> Option<(Vec<u32>, Vec<u32>)> {
+    let mut used = vec![false; count];
+    for &i in corners {
+        used[i as usize] = true;
+    }
+    if used.iter().all(|&u| u) {
+        return None;
+    }
+    let mut renumbered = vec![0u32; count];
+    let mut list = Vec::new();
+    for (i, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        renumbered[i] = list.len() as u32;
+        list.push(i as u32);
+    }
+    Some((list, corners.iter().map(|&i| renumbered[i as usize]).collect()))
 }
 
 #[cfg(test)]

@@ -28,12 +28,12 @@ pub(super) fn skins(skins: &[Skin], nodes: &[Node]) -> Result<()> {
     Ok(())
 }
 
-/// Corners, morph targets and skin influences match each primitive's vertex count.
+/// Soup vertices, morph targets and skin influences match each primitive's vertex count.
 pub(super) fn primitives(primitives: &[Primitive]) -> Result<()> {
     for (p, prim) in primitives.iter().enumerate() {
         let count = prim.positions.len();
-        if prim.corners.iter().any(|&c| c as usize >= count) || prim.targets.iter().any(|t| t.len() != count) {
-            return invalid(format!("primitive {p}: a corner or morph target does not match its {count} vertices"));
+        if prim.vertices.iter().any(|&v| v as usize >= count) || prim.targets.iter().any(|t| t.len() != count) {
+            return invalid(format!("primitive {p}: a vertex or morph target does not match its {count} vertices"));
         }
         if let Some(inf) = &prim.influences
             && (inf.joints.len() != count * inf.per_vertex || inf.weights.len() != inf.joints.len())
@@ -45,13 +45,13 @@ pub(super) fn primitives(primitives: &[Primitive]) -> Result<()> {
 }
 
 /// Instances name existing nodes and primitives, carry one weight per morph target and joints within their
-/// skin, and cover the rest soup's `corners` in order.
+/// skin, and cover the rest soup's `vertices` in order.
 pub(super) fn instances(
     instances: &[Instance],
     nodes: &[Node],
     skins: &[Skin],
     primitives: &[Primitive],
-    corners: usize,
+    vertices: usize,
 ) -> Result<()> {
     let mut covered = 0;
     for inst in instances {
@@ -73,10 +73,10 @@ pub(super) fn instances(
         if inst.first_vertex != covered {
             return invalid("the animated parts do not follow the static parts".into());
         }
-        covered += prim.corners.len();
+        covered += prim.vertices.len();
     }
-    if !instances.is_empty() && covered != corners {
-        return invalid(format!("the animated parts cover {covered} of {corners} corners"));
+    if !instances.is_empty() && covered != vertices {
+        return invalid(format!("the animated parts cover {covered} of {vertices} vertices"));
     }
     Ok(())
 }

@@ -89,7 +89,7 @@ impl AnimatedModel {
         let order = parents_first(&nodes)?;
         check::skins(&skins, &nodes)?;
         check::primitives(&primitives)?;
-        check::instances(&instances, &nodes, &skins, &primitives, rest.vertices().len())?;
+        check::instances(&instances, &nodes, &skins, &primitives, rest.vertex_count())?;
         check::clips(&clips, &nodes)?;
         let scratch = Scratch {
             local: nodes.iter().map(|n| n.rest).collect(),
@@ -142,13 +142,13 @@ impl AnimatedModel {
             let local = node.matrix.unwrap_or_else(|| s.local[n].matrix());
             s.global[n] = node.parent.map_or(local, |p| s.global[p] * local);
         }
-        let same_shape = out.vertices().len() == self.rest.vertices().len()
+        let same_shape = out.vertex_count() == self.rest.vertex_count()
             && out.parts.len() == self.rest.parts.len()
             && out.materials.len() == self.rest.materials.len();
         if !same_shape {
             out.clone_from(&self.rest);
         }
-        let vertices = out.vertices_mut();
+        let positions = out.positions_mut();
         for inst in &self.instances {
             let prim = &self.primitives[inst.primitive];
             let node = &self.nodes[inst.node];
@@ -171,9 +171,9 @@ impl AnimatedModel {
                     s.positions.iter_mut().for_each(|p| *p = m.transform_point3(*p));
                 }
             }
-            let corners = &mut vertices[inst.first_vertex..inst.first_vertex + prim.corners.len()];
-            for (v, &c) in corners.iter_mut().zip(&prim.corners) {
-                v.position = s.positions[c as usize].to_array();
+            let placed = &mut positions[inst.first_vertex..inst.first_vertex + prim.vertices.len()];
+            for (p, &v) in placed.iter_mut().zip(&prim.vertices) {
+                *p = s.positions[v as usize].to_array();
             }
         }
         Ok(())

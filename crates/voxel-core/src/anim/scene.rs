@@ -119,8 +119,8 @@ pub struct Influences {
 pub struct Primitive {
     /// Base positions.
     pub positions: Vec<Vec3>,
-    /// Vertex index of every triangle corner, in the order the soup holds the corners.
-    pub corners: Vec<u32>,
+    /// The vertex of each soup vertex an instance of the primitive holds, in the soup's order.
+    pub vertices: Vec<u32>,
     /// POSITION deltas per morph target.
     pub targets: Vec<Vec<Vec3>>,
     /// Joints and weights, when the primitive has JOINTS_0/WEIGHTS_0.
@@ -134,6 +134,6 @@ pub struct Instance {
     pub node: usize,
     /// Index into the primitives.
     pub primitive: usize,
-    /// The soup vertex of the primitive's first corner.
+    /// The first soup vertex of the instance.
     pub first_vertex: usize,
 }

@@ -104,7 +104,7 @@ mod tests {
     /// The colours of a .glb's vertices, back in sRGB (COLOR_0 is linear).
     fn glb_colors(path: &Path) -> HashSet<[u8; 3]> {
         let soup = crate::import::load_file(path).unwrap();
-        soup.vertices().iter().map(|v| [0, 1, 2].map(|k| linear_to_srgb(v.color[k]))).collect()
+        soup.colors().iter().map(|c| [0, 1, 2].map(|k| linear_to_srgb(c[k]))).collect()
     }
 
     /// Exports the boxes with `palette` as .vox and .glb; the colours in both are the JSON's `colors` many and

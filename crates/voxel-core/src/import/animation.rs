@@ -201,7 +201,7 @@ fn read_primitive(
     }
     Ok(Primitive {
         positions: decoded.positions.iter().map(|&p| Vec3::from(p)).collect(),
-        corners: decoded.corners.to_vec(),
+        vertices: decoded.used.clone().unwrap_or_else(|| (0..decoded.positions.len() as u32).collect()),
         targets,
         influences,
     })

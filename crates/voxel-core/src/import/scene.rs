@@ -16,9 +16,9 @@ use super::draco::DracoPrimitive;
 use super::materials::MaterialCache;
 use super::validate::{self, MAX_TRIANGLES};
 use crate::error::{Result, VoxelError};
-use crate::soup::{IndexedVertices, TriangleSoup};
+use crate::soup::{IndexedVertices, TriangleSoup, used_vertices};
 
-/// The node, mesh and decoded primitive of one soup part, and the soup vertex of its first corner.
+/// The node, mesh and decoded primitive of one soup part, and its first soup vertex.
 pub(super) struct PartSource {
     pub(super) node: usize,
     pub(super) mesh: usize,
@@ -172,8 +172,10 @@ pub(super) struct DecodedPrimitive<'a> {
     pub(super) positions: Cow<'a, [[f32; 3]]>,
     uvs: Option<Vec<[f32; 2]>>,
     colors: Option<Cow<'a, [[f32; 4]]>>,
-    /// Three vertex indices a triangle.
-    pub(super) corners: Cow<'a, [u32]>,
+    /// The vertices the triangles use, ascending, when they do not use all; `None`: every vertex.
+    pub(super) used: Option<Vec<u32>>,
+    /// Three vertex indices a triangle (into `used` when there is such a list).
+    corners: Cow<'a, [u32]>,
 }
 
 impl DecodedPrimitive<'_> {
@@ -205,7 +207,7 @@ impl<'a> SoupBuilder<'a> {
             return Err(VoxelError::Invalid(format!("the model has more than {MAX_TRIANGLES} triangles")));
         }
         for (decoded, prim) in self.parts_of_mesh[&mesh.index()].iter().enumerate() {
-            let first_vertex = self.soup.vertices().len();
+            let first_vertex = self.soup.vertex_count();
             self.instances.push(PartSource { node, mesh: mesh.index(), decoded, first_vertex });
             let part = self.soup.add_part(prim.material, prim.name.clone());
             let world = world_positions(&prim.positions, transform);
@@ -213,8 +215,12 @@ impl<'a> SoupBuilder<'a> {
             if matches!(world, Cow::Owned(_)) && world.as_flattened().iter().any(|c| !c.is_finite()) {
                 return Err(VoxelError::NonFinite(prim.name.clone()));
             }
-            let vertices =
-                IndexedVertices { positions: &world, uvs: prim.uvs.as_deref(), colors: prim.colors.as_deref() };
+            let vertices = IndexedVertices {
+                positions: &world,
+                uvs: prim.uvs.as_deref(),
+                colors: prim.colors.as_deref(),
+                used: prim.used.as_deref(),
+            };
             self.soup.push_indexed_triangles(part, &vertices, prim.triangles());
         }
         Ok(())
@@ -285,6 +291,11 @@ impl<'a> SoupBuilder<'a> {
             }
             None => None,
         };
+        let corners = triangles_of(prim.mode(), indices);
+        let (used, corners) = match used_vertices(positions.len(), &corners) {
+            Some((used, renumbered)) => (Some(used), Cow::Owned(renumbered)),
+            None => (None, corners),
+        };
         Ok(Some(DecodedPrimitive {
             primitive: prim.index(),
             material: soup_material,
@@ -292,7 +303,8 @@ impl<'a> SoupBuilder<'a> {
             positions,
             uvs,
             colors,
-            corners: triangles_of(prim.mode(), indices),
+            used,
+            corners,
         }))
     }
 

@@ -57,17 +57,18 @@ impl SoupParts {
 
     /// Analyses `soup`'s positions.
     pub(crate) fn of(soup: &TriangleSoup) -> Self {
-        let corners = soup.vertices();
-        // Source vertices save work when corners share them (a mesh with unused vertices may have more).
-        let welded = match soup.sources().filter(|s| 2 * s.positions.len() <= s.index.len()) {
-            Some(sources) => weld_indexed(&sources.positions, &sources.index),
-            None => weld(corners, |v| soup_key(v.position)),
+        let (positions, corners) = (soup.positions(), soup.triangles().as_flattened());
+        // Vertices save work when corners share them (a soup of separate triangles has one a corner).
+        let welded = if 2 * positions.len() <= corners.len() {
+            weld_indexed(positions, corners)
+        } else {
+            weld(corners, |&i| soup_key(positions[i as usize]))
         };
         // Seen from the first corner (exact differences in f64), so that a model far from the origin does not
         // lose its volume to rounding.
-        let origin = corners.first().map_or(DVec3::ZERO, |v| position(v.position));
+        let origin = corners.first().map_or(DVec3::ZERO, |&i| position(positions[i as usize]));
         let parts = Parts::of_welded(&welded.id, welded.first.len(), |t| {
-            [0, 1, 2].map(|k| position(corners[3 * t + k].position) - origin)
+            soup.triangle_positions(t).map(|p| position(p) - origin)
         });
         Self { parts: Arc::new(parts), first: welded.first }
     }
@@ -153,8 +154,8 @@ mod tests {
         let mut moved = soup.clone();
         assert!(Arc::ptr_eq(&closed_parts(&moved, &tris), &open));
         // The right box moved against the left one: a closed box, in the clone only.
-        for v in moved.vertices_mut().iter_mut().filter(|v| v.position[0] == 1.25) {
-            v.position[0] = 1.0;
+        for p in moved.positions_mut().iter_mut().filter(|p| p[0] == 1.25) {
+            p[0] = 1.0;
         }
         let tris = grid_tris(&moved, 16);
         assert_eq!(closed_parts(&moved, &tris).count(), 1);
@@ -170,21 +171,15 @@ mod tests {
         let mut cavity = cuboid([1.0; 3], [2.0; 3]);
         cavity.triangles.iter_mut().for_each(|t| t.swap(1, 2));
         append(&mut mesh, &cavity);
-        let mut soup = TriangleSoup::from_mesh(&mesh, [1.0; 4]);
+        let mut soup = separate_corners(&TriangleSoup::from_mesh(&mesh, [1.0; 4]));
         let hollow = cells(&soup, 12);
         assert_eq!(hollow, cells(&soup, 12), "the analysis reused");
         // One corner of the cavity moved off its neighbours': the cavity's wall is cracked (open), so it
         // counts by parity and no longer subtracts.
         let corner = 3 * 12;
-        soup.vertices_mut()[corner].position[0] += 0.001;
-        let mut fresh = TriangleSoup::default();
-        let material = fresh.add_material(Default::default());
-        let part = fresh.add_part(material, "fresh");
-        for t in soup.vertices().chunks_exact(3) {
-            fresh.push_triangle(part, [t[0], t[1], t[2]]);
-        }
+        soup.positions_mut()[corner][0] += 0.001;
         let filled = cells(&soup, 12);
-        assert_eq!(filled, cells(&fresh, 12));
+        assert_eq!(filled, cells(&separate_corners(&soup), 12));
         assert_eq!((hollow.len() + 4 * 4 * 4, filled.len()), (12 * 12 * 12, 12 * 12 * 12));
     }
 
@@ -203,61 +198,45 @@ mod tests {
     }
 
     #[test]
-    fn the_importers_source_vertices_weld_as_the_corners_do() {
+    fn the_imported_vertices_weld_as_the_corners_do() {
         let Some(dir) = crate::test_models::models_dir() else { return };
         let mut files = crate::files::expand_inputs(std::slice::from_ref(&dir));
         for sub in std::fs::read_dir(&dir).unwrap().flatten().filter(|e| e.path().is_dir()) {
             files.extend(crate::files::expand_inputs(&[sub.path()]));
         }
         assert!(files.len() >= 17, "{} corpus models", files.len());
-        let mut with_sources = 0;
         for file in &files {
             let soup = crate::import::load_file(file).unwrap();
-            // A model whose primitives share a larger vertex list than their corners keeps none.
-            let Some(sources) = soup.sources() else {
-                assert!(!file.ends_with("FlightHelmet.gltf"), "the helmet has source vertices");
-                continue;
-            };
-            with_sources += 1;
-            let by_corner = weld(soup.vertices(), |v| soup_key(v.position));
-            assert_eq!(
-                welded_fields(weld_indexed(&sources.positions, &sources.index)),
-                welded_fields(by_corner),
-                "{}",
-                file.display()
-            );
+            let (positions, corners) = (soup.positions(), soup.triangles().as_flattened());
+            let by_corner = weld(corners, |&i| soup_key(positions[i as usize]));
+            assert_eq!(welded_fields(weld_indexed(positions, corners)), welded_fields(by_corner), "{}", file.display());
         }
-        assert!(with_sources >= files.len() - 2, "{with_sources} of {} models kept their source vertices", files.len());
     }
 
     #[test]
-    fn a_soup_forgets_its_sources_when_its_corners_change() {
+    fn indexed_and_separate_corners_give_one_analysis_forgotten_when_positions_change() {
         let mesh = cuboid([0.0; 3], [1.0; 3]);
-        let indexed = || {
-            let mut soup = TriangleSoup::default();
-            let material = soup.add_material(Default::default());
-            let part = soup.add_part(material, "box");
-            let vertices = crate::soup::IndexedVertices { positions: &mesh.positions, uvs: None, colors: None };
-            soup.push_indexed_triangles(part, &vertices, &mesh.triangles);
-            soup
-        };
-        let soup = indexed();
-        assert_eq!(soup.sources().map(|s| (s.positions.len(), s.index.len())), Some((8, 36)));
-        assert_eq!(*SoupParts::kept_by(&soup).parts, *SoupParts::of(&TriangleSoup::from_mesh(&mesh, [1.0; 4])).parts);
-        let mut moved = indexed();
-        moved.vertices_mut()[0].position[0] = 0.5;
-        let mut grown = indexed();
+        let indexed = TriangleSoup::from_mesh(&mesh, [1.0; 4]);
+        assert_eq!((indexed.vertex_count(), indexed.triangles().len()), (8, 12));
+        let separate = separate_corners(&indexed);
+        assert_eq!(separate.vertex_count(), 36);
+        assert_eq!(*SoupParts::kept_by(&indexed).parts, *SoupParts::kept_by(&separate).parts);
+        let mut moved = indexed.clone();
+        moved.positions_mut()[0][0] = 0.5;
+        let mut grown = indexed.clone();
         grown.push_triangle(0, [crate::soup::Vertex::at([0.0; 3]); 3]);
-        assert!(moved.sources().is_none() && grown.sources().is_none());
-        // Sources after plain corners, or more vertices than corners: none kept.
-        let mut late = TriangleSoup::from_mesh(&mesh, [1.0; 4]);
-        late.add_sources(&mesh.positions, 36);
-        let mut wide = TriangleSoup::default();
-        wide.add_sources(&mesh.positions, 3);
-        assert!(late.sources().is_none() && wide.sources().is_none());
-        // Two primitives: the second's vertices follow the first's.
-        let mut two = TriangleSoup::default();
-        assert_eq!([two.add_sources(&mesh.positions, 36), two.add_sources(&mesh.positions, 36)], [0, 8]);
+        assert!(SoupParts::kept(&indexed) && !SoupParts::kept(&moved) && !SoupParts::kept(&grown));
+    }
+
+    /// `soup`'s triangles in one part, each with three vertices of its own.
+    fn separate_corners(soup: &TriangleSoup) -> TriangleSoup {
+        let mut separate = TriangleSoup::default();
+        let material = separate.add_material(Default::default());
+        let part = separate.add_part(material, "separate");
+        for t in 0..soup.triangle_count() {
+            separate.push_triangle(part, soup.triangle(t));
+        }
+        separate
     }
 
     #[test]

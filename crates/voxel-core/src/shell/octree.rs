@@ -171,8 +171,8 @@ mod tests {
         let first_copy = soup.triangle_count();
         // The ball twice: every triangle of it has an equally near twin with a higher index.
         for _ in 0..2 {
-            for t in ball.vertices().chunks_exact(3) {
-                soup.push_triangle(0, [t[0], t[1], t[2]]);
+            for t in 0..ball.triangle_count() {
+                soup.push_triangle(0, ball.triangle(t));
             }
         }
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(24), 1.0, 1 << 26).unwrap();

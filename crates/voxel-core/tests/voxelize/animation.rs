@@ -5,7 +5,7 @@ use std::f32::consts::FRAC_1_SQRT_2;
 
 use serde_json::{Value, json};
 use voxel_core::{
-    AnimatedModel, TriangleSoup, VoxelError, load_animated_file, load_animated_slice, load_slice, voxelize,
+    AnimatedModel, TriangleSoup, Vertex, VoxelError, load_animated_file, load_animated_slice, load_slice, voxelize,
     voxelize_within,
 };
 
@@ -72,7 +72,7 @@ impl Buffers {
 
 /// The posed position of every corner, in soup order.
 fn positions(soup: &TriangleSoup) -> Vec<[f32; 3]> {
-    soup.vertices().iter().map(|v| v.position).collect()
+    soup.corners().map(|v| v.position).collect()
 }
 
 fn pose(model: &mut AnimatedModel, clip: usize, t: f32) -> TriangleSoup {
@@ -158,8 +158,8 @@ fn a_one_joint_skin_turned_90_degrees_moves_its_vertices_as_computed_by_hand() {
     // Colours, parts and materials are the static import's.
     assert_eq!(posed.triangle_parts, rest.triangle_parts);
     assert_eq!(
-        posed.vertices().iter().map(|v| v.color).collect::<Vec<_>>(),
-        rest.vertices().iter().map(|v| v.color).collect::<Vec<_>>()
+        posed.corners().map(|v| v.color).collect::<Vec<_>>(),
+        rest.corners().map(|v| v.color).collect::<Vec<_>>()
     );
 }
 
@@ -222,6 +222,39 @@ fn malformed_animation_data_is_an_error_and_the_static_import_still_works() {
     // Two keyframe times, three rotations.
     let err = load_animated_slice(&skinned_cube(&TURN_KEYS[..8], "LINEAR", 0), None).unwrap_err();
     assert!(err.to_string().contains("animation turn channel 0: 3 keyframes need 12 output values, found 8"), "{err}");
+}
+
+#[test]
+fn a_primitive_that_uses_some_of_its_vertices_poses_just_those() {
+    // The cube's vertices, but only its top face's two triangles (z = 1): four of the eight vertices used,
+    // morphed +1 along x where x = 1 and moved by the node's translation.
+    let mut b = Buffers::default();
+    let (pos, _, corners) = b.cube();
+    let top: Vec<u16> = (0..corners.len() as u16).filter(|&i| corners[usize::from(i)][2] == 1.0).collect();
+    let top = b.shorts(&[top[0], top[1], top[3], top[0], top[3], top[2]], "SCALAR", 1);
+    let deltas: Vec<f32> = corners.iter().flat_map(|p| [p[0], 0.0, 0.0]).collect();
+    let deltas = b.floats(&deltas, "VEC3", 3);
+    let times = b.floats(&[0.0, 2.0], "SCALAR", 1);
+    let weights = b.floats(&[1.0, 1.0], "SCALAR", 1);
+    let translations = b.floats(&[0.0, 0.0, 0.0, 4.0, 0.0, 0.0], "VEC3", 3);
+    let bytes = b.glb(json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": top, "targets": [{"POSITION": deltas}]}], "weights": [0.0]}],
+        "animations": [{"channels": [
+            {"sampler": 0, "target": {"node": 0, "path": "weights"}},
+            {"sampler": 1, "target": {"node": 0, "path": "translation"}}
+        ], "samplers": [{"input": times, "output": weights}, {"input": times, "output": translations}]}]
+    }));
+    let mut model = load_animated_slice(&bytes, None).unwrap();
+    let rest = model.rest_soup().clone();
+    assert_eq!((rest.vertex_count(), rest.triangle_count()), (4, 2));
+    assert!(rest.positions().iter().all(|p| p[2] == 1.0), "{:?}", rest.positions());
+    let posed = pose(&mut model, 0, 1.0);
+    for (r, p) in positions(&rest).iter().zip(positions(&posed)) {
+        assert_close(p, [r[0] + r[0] + 2.0, r[1], r[2]], "posed corner");
+    }
 }
 
 /// A cube on node 0 with one morph target (+1 along x for the corners at x = 1) and a translation, both
@@ -323,14 +356,20 @@ fn a_model_without_animations_has_no_clips_and_cannot_be_posed() {
     let bytes = b.glb(json!({"scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]}]}));
     let mut model = load_animated_slice(&bytes, None).unwrap();
     assert!(model.clips().is_empty());
-    assert_eq!(model.rest_soup().vertices(), load_slice(&bytes, None).unwrap().vertices());
+    assert_eq!(
+        model.rest_soup().corners().collect::<Vec<_>>(),
+        load_slice(&bytes, None).unwrap().corners().collect::<Vec<_>>()
+    );
     assert!(model.pose_into(0, 0.0, &mut TriangleSoup::default()).is_err());
-    assert_eq!(model.into_rest_soup().vertices(), load_slice(&bytes, None).unwrap().vertices());
+    assert_eq!(
+        model.into_rest_soup().corners().collect::<Vec<_>>(),
+        load_slice(&bytes, None).unwrap().corners().collect::<Vec<_>>()
+    );
 }
 
 /// Mean displacement between two poses of the corners whose bind position satisfies `select`.
 fn mean_motion(bind: &TriangleSoup, a: &TriangleSoup, b: &TriangleSoup, select: impl Fn([f32; 3]) -> bool) -> f32 {
-    let moved: Vec<f32> = (bind.vertices().iter().zip(a.vertices()).zip(b.vertices()))
+    let moved: Vec<f32> = (bind.corners().zip(a.corners()).zip(b.corners()))
         .filter(|((r, _), _)| select(r.position))
         .map(|((_, p), q)| (glam::Vec3::from(p.position) - glam::Vec3::from(q.position)).length())
         .collect();
@@ -340,9 +379,8 @@ fn mean_motion(bind: &TriangleSoup, a: &TriangleSoup, b: &TriangleSoup, select: 
 
 /// The largest distance between the same corner in two poses.
 fn max_motion(a: &TriangleSoup, b: &TriangleSoup) -> f32 {
-    a.vertices()
-        .iter()
-        .zip(b.vertices())
+    a.corners()
+        .zip(b.corners())
         .map(|(p, q)| glam::Vec3::from(p.position).distance(q.position.into()))
         .fold(0.0, f32::max)
 }
@@ -419,22 +457,23 @@ fn the_milk_trucks_wheels_turn_rigidly_and_its_body_stays() {
     let parts_named = |name: &str| -> Vec<u32> {
         bind.parts.iter().enumerate().filter(|(_, p)| p.name.starts_with(name)).map(|(i, _)| i as u32).collect()
     };
-    let corners_of = |part: u32| -> Vec<usize> {
-        (0..bind.vertices().len()).filter(|&v| bind.triangle_parts[v / 3] == part).collect()
-    };
+    let (bind_corners, posed_corners): (Vec<_>, Vec<_>) = (bind.corners().collect(), posed.corners().collect());
+    let corners_of =
+        |part: u32| -> Vec<usize> { (0..bind_corners.len()).filter(|&v| bind.triangle_parts[v / 3] == part).collect() };
     for part in parts_named("Cesium_Milk_Truck") {
-        assert!(corners_of(part).iter().all(|&v| bind.vertices()[v].position == posed.vertices()[v].position));
+        assert!(corners_of(part).iter().all(|&v| bind_corners[v].position == posed_corners[v].position));
     }
     let wheels = parts_named("Wheels");
     assert_eq!(wheels.len(), 2);
     for part in wheels {
         let corners = corners_of(part);
-        let at = |soup: &TriangleSoup, v: usize| glam::Vec3::from(soup.vertices()[v].position);
-        assert!(corners.iter().any(|&v| at(&bind, v).distance(at(&posed, v)) > 0.3), "wheel {part} did not turn");
+        let at = |soup: &[Vertex], v: usize| glam::Vec3::from(soup[v].position);
+        let (bind, posed) = (&bind_corners[..], &posed_corners[..]);
+        assert!(corners.iter().any(|&v| at(bind, v).distance(at(posed, v)) > 0.3), "wheel {part} did not turn");
         // Rigid: every corner keeps its distance to the part's first corner.
         let first = corners[0];
         for &v in &corners {
-            let (before, after) = (at(&bind, v).distance(at(&bind, first)), at(&posed, v).distance(at(&posed, first)));
+            let (before, after) = (at(bind, v).distance(at(bind, first)), at(posed, v).distance(at(posed, first)));
             assert!((before - after).abs() < 1e-4, "wheel {part} corner {v}: {before} → {after}");
         }
     }
@@ -561,7 +600,7 @@ fn glb_frames_import_back_with_each_frames_cells() {
     let written = file_names(&gltf);
     assert_eq!(written, ["box-0000.bin", "box-0000.gltf", "box-0001.bin", "box-0001.gltf"]);
     let first = voxel_core::load_file(&gltf.join("box-0000.gltf")).unwrap();
-    assert_eq!(first.vertices(), voxel_core::load_file(&out.join("box-0000.glb")).unwrap().vertices());
+    assert!(first.corners().eq(voxel_core::load_file(&out.join("box-0000.glb")).unwrap().corners()));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -25,9 +25,9 @@ fn twins(plain: &str, packed: &str) -> Option<(TriangleSoup, TriangleSoup)> {
     let (a, mut b) = (load(plain)?, load(packed)?);
     if (plain, packed) == TRUCK_DRACO {
         // Undo the quarter turn exactly (a swap and a negation).
-        for v in b.vertices_mut() {
-            let [x, y, z] = v.position;
-            v.position = [z, y, -x];
+        for p in b.positions_mut() {
+            let [x, y, z] = *p;
+            *p = [z, y, -x];
         }
     }
     Some((a, b))

@@ -34,7 +34,7 @@ fn a_fine_grid_matches_a_reference_winding_count_on_sampled_columns() {
     assert!(spec.cell_count() > 1 << 28, "{:?}", spec.dims);
     let solid = model.occupancy();
     let tris: Vec<[DVec3; 3]> =
-        soup.vertices().chunks_exact(3).map(|c| [0, 1, 2].map(|k| spec.to_grid(c[k].position))).collect();
+        (0..soup.triangle_count()).map(|t| soup.triangle_positions(t).map(|p| spec.to_grid(p))).collect();
     // Columns through the centres of sampled triangles, so that every one crosses the model.
     let (mut columns, mut filled) = (0, 0);
     for t in tris.iter().step_by(tris.len() / 97) {
