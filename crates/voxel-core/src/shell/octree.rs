@@ -106,7 +106,7 @@ impl ShellOctree {
                 }
             }
             // Nearest last, so that it is searched first.
-            children[..n].sort_unstable_by(|a, b| b.2.cmp(&a.2));
+            children[..n].sort_unstable_by_key(|c| std::cmp::Reverse(c.2));
             stack.extend_from_slice(&children[..n]);
         }
         best.map(|(_, i)| i)
