@@ -4,16 +4,13 @@
 //! One parallel walk over the visible cells does everything for the cells near the surface (all but a few):
 //! it steps along the shell's cells beside the visible ones (both ascending), takes the nearest of the
 //! triangles the shell lists for the cell (or for its face neighbours), and samples the material there. The
-//! cells far from every triangle are collected and coloured afterwards through one spatial index.
-
-use std::sync::OnceLock;
+//! cells far from every triangle are collected and take the colour of the nearest shell cell afterwards.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::bvh::TriangleBvh;
 use crate::color::{pastel, sample};
-use crate::geom::{GridTriangle, closest_point_barycentric, distance2, farther_than, point_at};
+use crate::geom::{GridTriangle, closest_point_barycentric, farther_than, point_at};
 use crate::grid::{AscendingCoords, GridSpec};
 use crate::shell::Shell;
 use crate::shell::octree::ShellOctree;
@@ -81,19 +78,16 @@ fn centre(c: [u32; 3]) -> DVec3 {
 
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
-/// face lies), else of the whole model. Cells that far from the surface only occur where an open mesh leaves
-/// a column unmatched; for them one index is built, outside the parallel loop, and each lookup walks the
-/// part of it near its cell: a BVH over the triangles when they are fewer than the shell cells (a big
-/// triangle spans many cells, whose boxes bound it loosely), else an octree over the shell cells (built in
-/// time linear in the shell, where a BVH over many small triangles would cost more to build than the shell).
-/// Both give the nearest triangle of nonzero area, ties to the lower index.
+/// face lies). A cell farther from the surface (only where a fill leaves a side of solid open to the outside:
+/// an open mesh's unmatched column) takes the colour of the nearest shell cell ([`ShellOctree`]; ties to the
+/// lower index), as that cell is coloured at its own centre: the inside of a sliced model shows the surface
+/// colour nearest to it, and a lookup costs a walk over cells near it, never over the triangles of a hill.
 pub(crate) fn surface_colors(
     soup: &TriangleSoup,
     spec: &GridSpec,
     tris: &[GridTriangle],
     shell: &Shell,
     visible: &[u32],
-    bvh: &OnceLock<TriangleBvh>,
 ) -> Vec<([u8; 4], u32)> {
     let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
     let mut colors = vec![NO_COLOR; visible.len()];
@@ -141,45 +135,30 @@ pub(crate) fn surface_colors(
         .collect();
     if !far.is_empty() {
         let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
-        for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, bvh, &cells)) {
+        for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, &cells)) {
             colors[n] = nearest.map_or(NO_COLOR, color_at);
         }
     }
     colors
 }
 
-/// The nearest triangle of nonzero area to each of `cells` and the barycentric weights of its closest point,
-/// through a BVH or a shell octree (see [`surface_colors`]).
-fn nearest_far(
-    spec: &GridSpec,
-    tris: &[GridTriangle],
-    shell: &Shell,
-    bvh: &OnceLock<TriangleBvh>,
-    cells: &[u32],
-) -> Vec<Option<(usize, [f64; 3])>> {
-    // Each lookup gets the nearest triangle of the cell before it (in the same task): a far cell's neighbour's
-    // nearest triangle is close to its own, and a close first guess prunes most of the walk.
-    let far: Box<dyn Fn(DVec3, Option<usize>) -> Option<usize> + Sync> = if tris.len() < shell.cells.len() {
-        let bvh = bvh.get_or_init(|| TriangleBvh::build(tris));
-        let has_area = |t: &GridTriangle| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0;
-        Box::new(move |p, _| {
-            let d2 = |t: usize| if has_area(&tris[t]) { distance2(p, &tris[t]) } else { f64::INFINITY };
-            bvh.nearest(p, d2).filter(|n| n.1.is_finite()).map(|n| n.0)
-        })
-    } else {
-        let octree = ShellOctree::new(spec, shell, tris);
-        Box::new(move |p, guess| octree.nearest(tris, p, guess))
-    };
-    let far = &far;
+/// For each of `cells`, the nearest triangle at the centre of the nearest shell cell and the barycentric
+/// weights of its closest point there (see [`surface_colors`]).
+fn nearest_far(spec: &GridSpec, tris: &[GridTriangle], shell: &Shell, cells: &[u32]) -> Vec<Option<(usize, [f64; 3])>> {
+    let octree = ShellOctree::new(spec, shell);
+    let octree = &octree;
     cells
         .par_chunks(FAR_PER_TASK)
         .flat_map_iter(|chunk| {
+            // Each lookup starts from the nearest shell cell of the cell before it: a far cell's neighbour's is
+            // close to its own, and a close first guess prunes most of the walk.
             let mut guess = None;
             chunk.iter().map(move |&i| {
-                let p = centre(spec.coords(i as usize));
-                let nearest = far(p, guess);
-                guess = nearest.or(guess);
-                nearest.map(|t| (t, closest_point_barycentric(p, &tris[t])))
+                let source = octree.nearest(spec, spec.coords(i as usize), guess)?;
+                guess = Some(source);
+                let k = shell.cells.binary_search(&source).expect("the octree holds shell cells");
+                let p = centre(spec.coords(source as usize));
+                nearest_among(tris, p, shell.triangles_at(k).iter().map(|&t| t as usize))
             })
         })
         .collect()
@@ -221,6 +200,50 @@ mod tests {
             }
         }
         assert_eq!(search_near(&[], 0, 4), Err(0));
+    }
+
+    #[test]
+    fn far_cells_take_the_color_of_the_nearest_shell_cell() {
+        use crate::soup::{Material, Vertex};
+        use crate::{FillMode, GridSize, VoxelizeOptions};
+        // An open sheet of hills coloured by height: parity fills slabs whose sides lie far from the sheet.
+        let n = 40;
+        let vertex = |i: u32, j: u32| {
+            let (x, z) = (i as f32 / 4.0, j as f32 / 4.0);
+            let y = 0.8 * (0.9 * x).sin() * (0.7 * z).cos() + 0.3 * (2.3 * x + 1.1 * z).sin();
+            let t = (y + 1.1) / 2.2;
+            Vertex { color: [0.1 + 0.8 * t, 0.4 + 0.4 * (1.0 - t), 0.9 - 0.7 * t, 1.0], ..Vertex::at([x, y, z]) }
+        };
+        let mut soup = TriangleSoup::default();
+        let material = soup.add_material(Material::default());
+        let part = soup.add_part(material, "hills");
+        for (i, j) in (0..n).flat_map(|j| (0..n).map(move |i| (i, j))) {
+            soup.push_triangle(part, [vertex(i, j), vertex(i, j + 1), vertex(i + 1, j)]);
+            soup.push_triangle(part, [vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)]);
+        }
+        let options = VoxelizeOptions { grid: GridSize::Resolution(48), fill: FillMode::Parity, ..Default::default() };
+        let model = crate::voxelize(&soup, &options).unwrap();
+        let spec = &model.spec;
+        let tris = spec.grid_triangles(&soup);
+        let shell = crate::shell::shell(spec, &tris);
+        let is_shell = |i: Option<usize>| i.is_some_and(|i| shell.cells.binary_search(&(i as u32)).is_ok());
+        let distance2 = |a: [u32; 3], b: [u32; 3]| (0..3).map(|k| u64::from(a[k].abs_diff(b[k])).pow(2)).sum::<u64>();
+        let mut far = 0;
+        for v in model.voxels().filter(|v| v.visible) {
+            let cell = v.cell.map(u32::from);
+            let i = spec.index(cell[0], cell[1], cell[2]);
+            if is_shell(Some(i)) || FACE_STEPS.iter().any(|&step| is_shell(spec.neighbour(cell, step))) {
+                continue;
+            }
+            far += 1;
+            let k = (0..shell.cells.len())
+                .min_by_key(|&k| (distance2(cell, spec.coords(shell.cells[k] as usize)), shell.cells[k]))
+                .unwrap();
+            let p = centre(spec.coords(shell.cells[k] as usize));
+            let (t, w) = nearest_among(&tris, p, shell.triangles_at(k).iter().map(|&t| t as usize)).unwrap();
+            assert_eq!((v.color, v.part), (sample(&soup, t, w), part), "cell {cell:?}");
+        }
+        assert!(far > 100, "{far} far cells");
     }
 
     #[test]

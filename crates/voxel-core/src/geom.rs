@@ -229,11 +229,6 @@ pub(crate) fn farther_than(t: &GridTriangle, p: DVec3, d2: f64) -> bool {
     bound > d2 + 1e-9 * (1.0 + bound)
 }
 
-/// The squared distance from `p` to triangle `t`.
-pub fn distance2(p: DVec3, t: &GridTriangle) -> f64 {
-    point_at(t, closest_point_barycentric(p, t)).distance_squared(p)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -110,7 +110,7 @@ fn voxelize_within_timed(
     let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
-    let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, &bvh);
+    let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible);
     let times = PassTimes { fill: fill_time, shell: shell_time, color: coloring.elapsed() };
     if options.pastel {
         pastel_all(&mut colors);
