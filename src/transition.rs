@@ -487,6 +487,7 @@ fn start(
     };
     tweens.reserve(pool.slots.len());
     let end = flights.plan_all(&mut pool, &now, &mut looks, &mut tweens);
+    pool.rehome();
     // The model-level tweens: the spin and the visible count (the last transition's are replaced).
     for tween in &model_tweens {
         commands.entity(tween).despawn();

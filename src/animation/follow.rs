@@ -170,6 +170,7 @@ pub(super) fn follow(
         let VoxelTarget { position, scale, color, part } = *target;
         let i = slot as usize;
         pool.slots[i] = Slot { home: VoxelHome { position, scale, part }, ..Slot::default() };
+        pool.rehome();
         let color = pack_color(color);
         looks.set(i, turn.place(position, scale, color));
         tweens.fly(&mut pool, i, pop(position, from, scale, color, clock.time));

@@ -143,6 +143,15 @@ pub struct VoxelPool {
     pub shown: Option<AssetId<VoxelModelAsset>>,
     /// The voxels are wanted elsewhere (the falling style drops them): an animated model's new poses wait.
     pub held: bool,
+    /// Counts the times slots got new homes (whoever gives homes calls [`VoxelPool::rehome`]).
+    pub homes: u64,
+}
+
+impl VoxelPool {
+    /// Says that slots got new homes (what is kept about where homes lie is stale).
+    pub fn rehome(&mut self) {
+        self.homes += 1;
+    }
 }
 
 /// Where one voxel of a model goes: centre in cloud space, scale and colour.
@@ -229,6 +238,7 @@ pub fn grow_pool(pool: &mut VoxelPool, looks: &mut GpuVoxels, count: usize) {
     if pool.slots.len() < count {
         pool.slots.resize(count, Slot::default());
         looks.reserve(count);
+        pool.rehome();
     }
 }
 

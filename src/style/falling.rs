@@ -168,6 +168,7 @@ fn control(
     for (k, t) in interior.iter().enumerate() {
         let home = VoxelHome { position: t.position, scale: t.scale, part: t.part };
         pool.slots[first_spare + k] = Slot { home, ..Slot::default() };
+        pool.rehome();
         looks.set(first_spare + k, turn.place(t.position, t.scale, pack_color(t.color)));
     }
     let members: Vec<(u32, Vec3)> = shown

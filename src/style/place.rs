@@ -15,7 +15,7 @@ use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
 
 use super::bubbles::{Bubble, BubbleSettings, Bubbles};
-use super::repel::{RepelActive, repel_target};
+use super::repel::{RepelActive, away_from_ray, repel_target};
 
 /// Everything placing needs besides the voxels: the model's turn, the cursor and the clock.
 #[derive(Clone, Debug)]
@@ -38,18 +38,70 @@ pub struct Placement {
     pub bubbles: BubbleSettings,
 }
 
+/// What placing keeps per chunk of slots: the ball around its homes and whether a spring of it moves, so a
+/// chunk the cursor cannot reach and whose voxels rest is passed over whole.
+#[derive(Debug, Default)]
+pub struct Chunks {
+    /// The pool's home count the balls were made for.
+    homes: Option<u64>,
+    /// Centre and radius of the ball around each chunk's homes (the cloud's frame).
+    balls: Vec<(Vec3, f32)>,
+    /// A spring of the chunk moved last frame.
+    moving: Vec<bool>,
+}
+
+impl Chunks {
+    /// Makes the balls anew when the homes changed (`homes`: the pool's count of new homes).
+    pub fn refresh(&mut self, slots: &[Slot], homes: u64) {
+        let count = slots.len().div_ceil(VOXELS_PER_CHUNK);
+        if self.homes == Some(homes) && self.balls.len() == count {
+            return;
+        }
+        self.balls = slots
+            .par_chunks(VOXELS_PER_CHUNK)
+            .map(|chunk| {
+                let (lo, hi) = chunk
+                    .iter()
+                    .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), s| (lo.min(s.home.position), hi.max(s.home.position)));
+                ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
+            })
+            .collect();
+        // Every chunk is looked at once more: its springs may be anywhere.
+        self.moving = vec![true; count];
+        self.homes = Some(homes);
+    }
+}
+
 impl Placement {
     /// Places every voxel of `slots` at home that moves (all of them with `bubbles`, by slot; otherwise those the
-    /// cursor reaches or whose spring still moves) into `looks`, over all cores. Returns whether any voxel is
-    /// still off its cell.
-    pub fn place(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, looks: &mut GpuVoxels) -> bool {
+    /// cursor reaches or whose spring still moves) into `looks`, over all cores, passing over the chunks
+    /// `chunks` says are out of reach and at rest. Returns whether any voxel is still off its cell.
+    pub fn place(
+        &self,
+        slots: &mut [Slot],
+        bubbles: Option<&[Bubble]>,
+        looks: &mut GpuVoxels,
+        chunks: &mut Chunks,
+    ) -> bool {
         let displaced = AtomicBool::new(false);
-        slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(looks.pieces()).for_each(|(slots, mut piece)| {
-            if self.place_piece(slots, bubbles, &mut piece) {
-                displaced.store(true, Ordering::Relaxed);
-            }
-        });
+        let pieces = slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(looks.pieces());
+        pieces.zip(chunks.balls.par_iter().zip(chunks.moving.par_iter_mut())).for_each(
+            |((slots, mut piece), (ball, moving))| {
+                if bubbles.is_none() && !*moving && !self.reaches(*ball) {
+                    return;
+                }
+                *moving = self.place_piece(slots, bubbles, &mut piece);
+                if *moving {
+                    displaced.store(true, Ordering::Relaxed);
+                }
+            },
+        );
         displaced.into_inner()
+    }
+
+    /// Whether the cursor can push a voxel whose home lies in `ball` (centre, radius).
+    fn reaches(&self, (centre, radius): (Vec3, f32)) -> bool {
+        self.ray.is_some_and(|ray| away_from_ray(centre, ray).length() < self.radius + radius)
     }
 
     fn place_piece(&self, slots: &mut [Slot], bubbles: Option<&[Bubble]>, piece: &mut Piece<GpuVoxel>) -> bool {
@@ -104,6 +156,7 @@ pub(super) fn place_at_home(
     bubbles: Option<Res<Bubbles>>,
     mut looks: ResMut<GpuVoxels>,
     mut springs: ResMut<RepelActive>,
+    mut chunks: Local<Chunks>,
 ) {
     let ray = cursor.0.filter(|_| repel.enabled);
     let bubbles = bubbles.as_ref().map(|b| &b.0[..]).filter(|_| *style.get() == Style::Bubbles);
@@ -122,7 +175,8 @@ pub(super) fn place_at_home(
         in_model: pool.visible,
         bubbles: timing.clone(),
     };
-    springs.0 = placement.place(&mut pool.slots, bubbles, &mut looks);
+    chunks.refresh(&pool.slots, pool.homes);
+    springs.0 = placement.place(&mut pool.slots, bubbles, &mut looks, &mut chunks);
 }
 
 #[cfg(test)]
@@ -136,6 +190,7 @@ mod tests {
         slots: Vec<Slot>,
         bubbles: Option<Vec<Bubble>>,
         looks: GpuVoxels,
+        chunks: Chunks,
     }
 
     /// The look every voxel starts with (nothing placed yet).
@@ -153,11 +208,13 @@ mod tests {
                 slots: (0..n).map(|i| Slot { home: home(i), ..Slot::default() }).collect(),
                 bubbles: bubbles.map(|state| vec![Bubble { phase: 0.0, state }; n]),
                 looks,
+                chunks: Chunks::default(),
             }
         }
 
         fn place(&mut self, p: &Placement) -> bool {
-            p.place(&mut self.slots, self.bubbles.as_deref(), &mut self.looks)
+            self.chunks.refresh(&self.slots, 0);
+            p.place(&mut self.slots, self.bubbles.as_deref(), &mut self.looks, &mut self.chunks)
         }
 
         /// Whether voxel `i` was written (it moved from where it started).
@@ -244,6 +301,27 @@ mod tests {
             assert!(voxels.looks.items[i].position().distance(expected) < 1e-2, "voxel {i}");
             assert!(!voxels.slots[i].repel.is_rest(), "voxel {i}");
         }
+    }
+
+    #[test]
+    fn chunks_out_of_the_cursors_reach_and_at_rest_are_passed_over() {
+        let n = 3 * VOXELS_PER_CHUNK;
+        let mut voxels = Voxels::row(n, None);
+        let near_first = placement(10.0, n);
+        assert!(voxels.place(&near_first));
+        assert_eq!(voxels.chunks.moving, vec![true, false, false], "only the first chunk's springs move");
+        // The cursor moves to the last chunk: its voxels are reached, the first chunk's springs go on.
+        let near_last = placement((n - 10) as f32, n);
+        assert!(voxels.place(&near_last));
+        assert_eq!(voxels.chunks.moving, vec![true, false, true]);
+        assert!(!voxels.slots[n - 10].repel.is_rest() && !voxels.written(VOXELS_PER_CHUNK + 5));
+        // New homes make new balls: the middle chunk moved under the cursor is reached.
+        for (i, slot) in voxels.slots[VOXELS_PER_CHUNK..2 * VOXELS_PER_CHUNK].iter_mut().enumerate() {
+            slot.home.position = Vec3::X * (n - 10 + i % 3) as f32;
+        }
+        voxels.chunks.refresh(&voxels.slots, 1);
+        near_last.place(&mut voxels.slots, None, &mut voxels.looks, &mut voxels.chunks);
+        assert!(!voxels.slots[VOXELS_PER_CHUNK + 1].repel.is_rest(), "a rehomed chunk was passed over");
     }
 
     #[test]
