@@ -5,12 +5,14 @@
 //! transition morphs them from where they lie).
 
 use bevy::prelude::*;
+use rayon::prelude::*;
 
 use crate::style::ToggleFall;
 
 use super::Style;
+
 use crate::instancing::{
-    GpuVoxels, MAX_DRAWN, Slot, Turn, VoxelHome, VoxelPool, floor_height, grow_pool, pack_color, voxel_target,
+    GpuVoxel, GpuVoxels, MAX_DRAWN, Slot, Turn, VoxelHome, VoxelPool, floor_height, grow_pool, pack_color, voxel_target,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::schedule::StyleSystems;
@@ -21,9 +23,9 @@ use super::pile::{Pile, PileParams};
 
 /// The most bodies the pile simulates: a model with more voxels falls in clumps of neighbouring voxels (slots
 /// are in Morton order, so consecutive ones are near), ⌈voxels / `FALL_CAP`⌉ a clump, each one body of the pile.
-pub const FALL_CAP: usize = 100_000;
+pub const FALL_CAP: usize = 25_000;
 
-/// A voxel of the falling pile: its slot, its body in the pile and where it sits from its body (a clump's
+/// A voxel of the falling pile (the pile keeps them in slot order): its slot, its body in the pile and where it sits from its body (a clump's
 /// voxels share a body when the model falls in clumps).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Falling {
@@ -199,18 +201,24 @@ fn step(mut pile: ResMut<FallingPile>) {
     pile.pile.step();
 }
 
-/// Writes the pile's positions into the falling voxels' looks.
+/// Writes the pile's positions into the falling voxels' looks, a chunk of slots to a task (the pile's voxels
+/// are in slot order).
 fn sync(pile: Res<FallingPile>, mut looks: ResMut<GpuVoxels>) {
     if !pile.is_changed() {
         return;
     }
-    for v in &pile.voxels {
-        if let Some(p) = pile.pile.positions.get(v.body as usize) {
-            let mut look = looks.items[v.slot as usize];
-            look.translation = (*p + v.offset).into();
-            looks.set(v.slot as usize, look);
+    let (voxels, positions) = (&pile.voxels, &pile.pile.positions);
+    looks.pieces().for_each(|mut piece| {
+        let first = voxels.partition_point(|v| (v.slot as usize) < piece.start);
+        let end = piece.start + piece.items.len();
+        for v in voxels[first..].iter().take_while(|v| (v.slot as usize) < end) {
+            if let Some(p) = positions.get(v.body as usize) {
+                let i = v.slot as usize - piece.start;
+                let look = GpuVoxel { translation: (*p + v.offset).into(), ..piece.items[i] };
+                piece.set(i, look);
+            }
         }
-    }
+    });
 }
 
 pub(super) fn plugin(app: &mut App) {
