@@ -570,11 +570,9 @@ fn show_recolored(
     mut looks: ResMut<GpuVoxels>,
     mut layouts: ResMut<Layouts>,
 ) {
-    for r in recolored.read() {
-        layouts.forget_model(r.model);
-        if pool.shown == Some(r.model) {
-            *pending = Some(r.model);
-        }
+    // (`start`, earlier in the frame, has forgotten the recoloured models' layouts.)
+    if let Some(r) = recolored.read().filter(|r| pool.shown == Some(r.model)).last() {
+        *pending = Some(r.model);
     }
     if active.running.is_some() {
         return;

@@ -246,6 +246,18 @@ mod tests {
     }
 
     #[test]
+    fn the_most_voxels_drawn_have_room_for_their_looks_and_tweens() {
+        let mut pool = VoxelPool::default();
+        let mut looks = super::super::GpuVoxels::default();
+        super::super::grow_pool(&mut pool, &mut looks, super::super::MAX_DRAWN);
+        assert!(looks.items.len() >= super::super::MAX_DRAWN && pool.slots.len() > 1_000_000);
+        let mut tweens = VoxelTweens::default();
+        let last = super::super::MAX_DRAWN - 1;
+        tweens.fly(&mut pool, last, VoxelTween { end: 1.0, ..Default::default() });
+        assert_eq!(tweens.get(last).map(|t| t.end), Some(1.0), "the last drawable slot's tween is kept");
+    }
+
+    #[test]
     fn a_tween_is_96_bytes_and_flies_from_its_start_until_its_end() {
         assert_eq!(size_of::<VoxelTween>(), 96);
         assert_eq!(size_of::<GpuClock>(), 16);

@@ -186,7 +186,8 @@ impl<T: Record> Mirror<T> {
         if slots <= self.items.len() {
             return;
         }
-        let most = ((128 << 20) / size_of::<T>()).next_multiple_of(VOXELS_PER_CHUNK);
+        // One storage binding holds at most 128 MiB (the pool's cap keeps slots within it for every record).
+        let most = (128 << 20) / size_of::<T>() / VOXELS_PER_CHUNK * VOXELS_PER_CHUNK;
         let chunks = slots.div_ceil(VOXELS_PER_CHUNK).max(1).next_power_of_two();
         let len = (chunks * VOXELS_PER_CHUNK).min(most);
         self.items.resize(len, T::default());

@@ -199,8 +199,9 @@ pub fn voxel_target(model: &voxel_core::VoxelModel, v: &Voxel, box_size: f32) ->
     VoxelTarget { position: Vec3::from(model.center(v)), scale, color: v.color, part: v.part }
 }
 
-/// The most voxels the app draws: a model with more shows its first this many (the panel says so).
-pub const MAX_DRAWN: usize = 2_000_000;
+/// The most voxels the app draws: as many whole chunks as one storage binding (128 MiB) holds tweens for, about
+/// 1.4M; a model with more shows its first this many (the panel says so).
+pub const MAX_DRAWN: usize = (128 << 20) / size_of::<VoxelTween>() / VOXELS_PER_CHUNK * VOXELS_PER_CHUNK;
 
 /// How many voxels of `model` are drawn (only its visible ones when `hollow`; at most [`MAX_DRAWN`]).
 pub fn drawn_count(model: &VoxelModelAsset, hollow: bool) -> usize {
