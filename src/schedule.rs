@@ -159,6 +159,8 @@ pub enum TransitionSystems {
     Float,
     /// A transition starts.
     Start,
+    /// The next batch of its voxels takes off.
+    TakeOff,
     /// The model-level tweens get their speed.
     Pace,
     /// The model-level tweens step (bevy_tweening's set).
@@ -282,6 +284,7 @@ impl Plugin for SchedulePlugin {
                 TransitionSystems::Placeholder,
                 TransitionSystems::Float,
                 TransitionSystems::Start,
+                TransitionSystems::TakeOff,
                 TransitionSystems::Pace,
                 TransitionSystems::Tween,
                 TransitionSystems::Step,

@@ -89,6 +89,11 @@ impl VoxelTween {
         }))
     }
 
+    /// Whether slot `slot` shows while it flies at `clock`.
+    pub fn shows(&self, slot: usize, clock: &GpuClock) -> bool {
+        self.show != TweenShow::Count as u32 || (slot as f32) < clock.shown
+    }
+
     /// Whether it is still in the air at clock time `time`.
     pub fn flies(&self, time: f32) -> bool {
         time - self.start < self.end
@@ -128,15 +133,20 @@ impl GpuClock {
     }
 }
 
+/// A voxel in flight as drawn at `clock`, in the model's frame: (position, box scale, colour, shows).
+pub fn in_flight(tween: &VoxelTween, slot: usize, clock: &GpuClock) -> (Vec3, Vec3, u32, bool) {
+    let elapsed = clock.time - tween.start;
+    let (position, scale) = tween.transform(elapsed);
+    (position, scale, tween.color(elapsed), tween.shows(slot, clock))
+}
+
 /// Voxel `slot` as drawn at `clock`, `look` when it is not in flight: the vertex shaders' `flown`.
 pub fn flown(look: &GpuVoxel, tween: &VoxelTween, slot: usize, clock: &GpuClock) -> GpuVoxel {
-    let elapsed = clock.time - tween.start;
     if !tween.flies(clock.time) {
         return *look;
     }
-    let (position, scale) = tween.transform(elapsed);
-    let shows = tween.show != TweenShow::Count as u32 || (slot as f32) < clock.shown;
-    let placed = super::Turn::new(Quat::from_rotation_y(clock.angle)).place(position, scale, tween.color(elapsed));
+    let (position, scale, color, shows) = in_flight(tween, slot, clock);
+    let placed = super::Turn::new(Quat::from_rotation_y(clock.angle)).place(position, scale, color);
     if shows { placed } else { placed.hidden() }
 }
 
@@ -201,31 +211,29 @@ impl VoxelTweens {
         }
     }
 
-    /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
-    pub fn drawn(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> Vec<GpuVoxel> {
-        let mut drawn = Vec::new();
-        self.drawn_into(pool, looks, clock, |v| v, &mut drawn);
-        drawn
+    /// Slot `slot`'s flight, if it is in the air at clock time `time`.
+    pub fn flight(&self, pool: &VoxelPool, slot: usize, time: f32) -> Option<&VoxelTween> {
+        self.get(slot).filter(|t| pool.slots[slot].flying && t.flies(time))
     }
 
-    /// [`Self::drawn`], each voxel mapped by `map`, into `out` (whose memory is reused).
-    pub fn drawn_into<T: Send>(
-        &self,
-        pool: &VoxelPool,
-        looks: &[GpuVoxel],
-        clock: &GpuClock,
-        map: impl Fn(GpuVoxel) -> T + Sync,
-        out: &mut Vec<T>,
-    ) {
+    /// How many slots there are up to the last that shows at `clock` (searched from the end).
+    pub fn showing(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> usize {
+        let shows = |i: usize| match self.flight(pool, i, clock.time) {
+            Some(tween) => tween.shows(i, clock),
+            None => looks[i].shows(),
+        };
+        (0..pool.slots.len()).rev().find(|&i| shows(i)).map_or(0, |last| last + 1)
+    }
+
+    /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
+    pub fn drawn(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> Vec<GpuVoxel> {
         (0..pool.slots.len())
             .into_par_iter()
-            .map(|i| {
-                map(match self.get(i).filter(|_| pool.slots[i].flying) {
-                    Some(tween) => flown(&looks[i], tween, i, clock),
-                    None => looks[i],
-                })
+            .map(|i| match self.flight(pool, i, clock.time) {
+                Some(tween) => flown(&looks[i], tween, i, clock),
+                None => looks[i],
             })
-            .collect_into_vec(out);
+            .collect()
     }
 }
 

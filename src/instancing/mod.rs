@@ -16,7 +16,7 @@ use bevy::math::{Mat3A, Vec3A};
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 
-pub use flight::{GpuClock, TweenShow, VoxelTween, VoxelTweens, back_out, flown};
+pub use flight::{GpuClock, TweenShow, VoxelTween, VoxelTweens, back_out, flown, in_flight};
 pub use gpu::{Detail, GpuVoxel, GpuVoxels, Mirror, Piece, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
 pub use material::{ChunkLayout, VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
 

@@ -6,26 +6,29 @@
 //! [`ActiveTransition`]. The per-voxel flights are not: bevy_tweening 0.16 steps every `TweenAnim` in one
 //! exclusive, single-threaded system through boxed closures, measured at 14.6 ms a frame for 100k per-voxel
 //! tweens against 5.0 ms for a parallel system on a component (`../shared/docs/verified-stack.md`, 2 cores).
-//! Voxels are pool slots, not entities: a morph writes one [`VoxelTween`] per slot ([`VoxelTweens`]) and the
-//! look where it lands, once; the GPU draws the flight from the tween at the frame's clock (the spin angle and
-//! the visible count in it), so the CPU's part of a frame mid-morph is the clock and landing the voxels whose
-//! flights are over.
+//! Voxels are pool slots, not entities: a morph writes one [`VoxelTween`](crate::instancing::VoxelTween) per
+//! slot and the look where it lands, once ([`takeoff`]: a batch of chunks a frame); the GPU draws the flight
+//! from the tween at the frame's clock (the spin angle and the visible count in it), so the CPU's part of a
+//! frame mid-morph is the clock and landing the voxels whose flights are over. The layout a model is shown with
+//! comes from [`layout`].
+
+pub mod layout;
+pub mod takeoff;
 
 use std::f32::consts::PI;
-use std::sync::Arc;
 use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy_tweening::{AnimTarget, Lens, Tween, TweenAnim, TweeningPlugin};
-use rayon::prelude::*;
+
+pub use layout::{Layouts, layout, order_targets};
+pub use takeoff::{Flights, Takeoff};
 
 use crate::instancing::{
-    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, RepelOffset, Slot, Turn, TweenShow, VOXELS_PER_CHUNK, VoxelCloud,
-    VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens, apply_targets, drawn_count, pack_color,
-    placeholder_targets, targets_for,
+    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, Turn, VoxelCloud, VoxelPool, VoxelTweens, apply_targets,
+    drawn_count, pack_color, placeholder_targets,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
-use crate::rng::Rng;
 use crate::schedule::TransitionSystems;
 use crate::settings::{SettingDrag, VoxelSettings};
 
@@ -207,306 +210,102 @@ fn pace(settings: Res<VoxelSettings>, mut tweens: Query<&mut TweenAnim, With<Mod
     }
 }
 
-/// A 3D Morton code of a cell-ish position (10 bits per axis).
-fn morton(p: Vec3, lo: Vec3, size: f32) -> u32 {
-    let spread = |v: f32| {
-        let mut x = ((v / size).clamp(0.0, 1.0) * 1023.0) as u32;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
-    let q = p - lo;
-    spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2
-}
-
-/// Sorts targets per the assignment so slot i of the old layout flies to a nearby rank of the new one (keys
-/// computed once per target, sorted in parallel; equal keys keep their order).
-pub fn order_targets(targets: &mut [VoxelTarget], assignment: Assignment) {
-    match assignment {
-        Assignment::Grid => {}
-        Assignment::Height => {
-            let angle = |p: Vec3| p.z.atan2(p.x);
-            sort_by_key(targets, |t| (ordered(t.position.y), ordered(angle(t.position))));
-        }
-        Assignment::Morton => {
-            let lo = targets.iter().fold(Vec3::splat(f32::MAX), |m, t| m.min(t.position));
-            let hi = targets.iter().fold(Vec3::splat(f32::MIN), |m, t| m.max(t.position));
-            let size = (hi - lo).max_element().max(1e-6);
-            sort_by_key(targets, |t| morton(t.position, lo, size));
-        }
-    }
-}
-
-/// A float's bits in an order that agrees with `f32::total_cmp`.
-fn ordered(f: f32) -> u32 {
-    let bits = f.to_bits();
-    if bits >> 31 == 1 { !bits } else { bits | 1 << 31 }
-}
-
-/// Sorts `targets` by `key`, stably.
-fn sort_by_key<K: Ord + Send>(targets: &mut [VoxelTarget], key: impl Fn(&VoxelTarget) -> K + Sync) {
-    let mut keyed: Vec<(K, u32)> = targets.par_iter().enumerate().map(|(i, t)| (key(t), i as u32)).collect();
-    keyed.par_sort_unstable();
-    let sorted: Vec<VoxelTarget> = keyed.iter().map(|(_, i)| targets[*i as usize]).collect();
-    targets.copy_from_slice(&sorted);
-}
-
-/// The layout a model is shown with (ordered per the assignment).
-pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &TransitionSettings) -> Vec<VoxelTarget> {
-    let mut targets = targets_for(model, settings.box_size, settings.hollow);
-    order_targets(&mut targets, transition.assignment);
-    targets
-}
-
-/// What a layout depends on besides its model's contents: the model, the box size, hollow, the assignment.
-type LayoutKey = (AssetId<VoxelModelAsset>, u32, bool, Assignment);
-
-/// The last few layouts made (a morph back to a model, a recolour and the animation's map reuse them), each
-/// forgotten when its model changes.
-#[derive(Resource, Debug, Default)]
-pub struct Layouts(Vec<(LayoutKey, Arc<[VoxelTarget]>)>);
-
-impl Layouts {
-    /// Layouts kept.
-    const KEPT: usize = 3;
-
-    /// Model `id`'s layout (`model`) with these settings, made if it is not kept.
-    pub fn of(
-        &mut self,
-        id: AssetId<VoxelModelAsset>,
-        model: &VoxelModelAsset,
-        settings: &VoxelSettings,
-        transition: &TransitionSettings,
-    ) -> Arc<[VoxelTarget]> {
-        let key = (id, settings.box_size.to_bits(), settings.hollow, transition.assignment);
-        if let Some((_, kept)) = self.0.iter().find(|(k, _)| *k == key) {
-            return kept.clone();
-        }
-        let made: Arc<[VoxelTarget]> = layout(model, settings, transition).into();
-        if self.0.len() == Self::KEPT {
-            self.0.remove(0);
-        }
-        self.0.push((key, made.clone()));
-        made
-    }
-
-    /// Forgets the layouts of the models that changed or went.
-    fn forget(&mut self, events: &mut MessageReader<AssetEvent<VoxelModelAsset>>) {
-        for event in events.read() {
-            if let AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } = event {
-                self.forget_model(*id);
-            }
-        }
-    }
-
-    /// Forgets model `id`'s layouts (its colours changed this frame: its asset event comes later).
-    fn forget_model(&mut self, id: AssetId<VoxelModelAsset>) {
-        self.0.retain(|((model, ..), _)| *model != id);
-    }
-}
-
-/// The voxel state a slot is in now: (position in the cloud's frame, scale, colour, visible).
-type SlotState = (Vec3, Vec3, u32, bool);
-
-/// Plans the tween of slot `i` from its current state to the new layout (random draws from `rng`), starting
-/// at clock time `start`.
-pub fn plan(
-    i: usize,
-    now: SlotState,
-    old: &[SlotState],
-    new: &[VoxelTarget],
-    settings: &TransitionSettings,
-    start: f32,
-    rng: &mut Rng,
-) -> Option<(VoxelTween, VoxelHome)> {
-    let (old_count, new_count) = (old.len(), new.len());
-    if i >= old_count.max(new_count) || new.is_empty() {
-        return None;
-    }
-    let duration = settings.base_duration + settings.extra_duration * rng.f32().powf(settings.duration_power);
-    let delay = settings.max_delay * rng.f32();
-    let color_delay = settings.color_delay_factor * rng.f32() * duration;
-    let (mut from, mut from_scale, mut color_from, _) = now;
-    let (to, to_scale, color_to, part);
-    if i < new_count {
-        (to, to_scale, color_to, part) = (new[i].position, new[i].scale, new[i].color, new[i].part);
-        if i >= old_count {
-            // A voxel joining the model: it comes out of a random occupied cell of the old one and shows up as
-            // the visible count grows.
-            if let Some(source) = (!old.is_empty()).then(|| old[rng.below(old.len())]) {
-                (from, from_scale, color_from) = (source.0, source.1, source.2);
-            }
-        }
-    } else {
-        // A surplus voxel: it flies into a random occupied cell and hides as the visible count shrinks.
-        let target = new[rng.below(new_count)];
-        (to, to_scale, color_to, part) = (target.position, target.scale, target.color, target.part);
-    }
-    // Joining and surplus voxels show or hide as the visible count passes their slot.
-    let count_end = if i >= old_count.min(new_count) { settings.count_duration } else { 0.0 };
-    let home = VoxelHome { position: to, scale: to_scale, part };
-    let tween = VoxelTween {
-        from,
-        to,
-        from_scale,
-        to_scale,
-        delay,
-        duration,
-        color_from,
-        color_to: pack_color(color_to),
-        color_delay,
-        color_duration: settings.color_duration,
-        start,
-        overshoot: settings.overshoot,
-        show: TweenShow::Count as u32,
-        ..Default::default()
-    }
-    .ending(settings.spin_duration.max(count_end));
-    Some((tween, home))
-}
-
-/// Everything a morph's flights are planned from.
-struct Flights<'a> {
-    /// Where the voxels that show now are (slot order, up to the last that shows).
-    old: &'a [SlotState],
-    /// The new layout.
-    new: &'a [VoxelTarget],
-    /// The timings.
-    settings: &'a TransitionSettings,
-    /// The clock time the morph starts.
-    start: f32,
-    /// The model's turn once the spin is over.
-    landed: Turn,
-    /// The morph's random seed (each chunk of slots draws from its own generator).
-    seed: u64,
-}
-
-impl Flights<'_> {
-    /// Plans every slot's flight from `now` (a chunk of slots to a task): its tween, its home and the look it
-    /// lands on; a slot with no part in the morph hides. Returns when the last voxel lands.
-    fn plan_all(
-        &self,
-        pool: &mut VoxelPool,
-        now: &[SlotState],
-        looks: &mut GpuVoxels,
-        tweens: &mut VoxelTweens,
-    ) -> f32 {
-        let slots = pool.slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(now.par_chunks(VOXELS_PER_CHUNK));
-        slots
-            .zip(looks.pieces())
-            .zip(tweens.pieces())
-            .enumerate()
-            .map(|(c, (((slots, now), mut looks), (mut flights, in_air)))| {
-                let mut rng = Rng::new(self.seed ^ (c as u64).wrapping_mul(0x2545_f491_4f6c_dd1d));
-                let mut end = 0.0f32;
-                for (i, (slot, state)) in slots.iter_mut().zip(now).enumerate() {
-                    let index = looks.start + i;
-                    // The flight starts where the voxel is now, repel displacement included: that is spent.
-                    slot.repel = RepelOffset::default();
-                    match plan(index, *state, self.old, self.new, self.settings, self.start, &mut rng) {
-                        Some((tween, home)) => {
-                            end = end.max(tween.end);
-                            *slot = Slot { home, flying: true, ..*slot };
-                            *in_air = true;
-                            let look = self.landed.place(tween.to, tween.to_scale, tween.color_to);
-                            looks.set(i, if index < self.new.len() { look } else { look.hidden() });
-                            flights.set(i, tween);
-                        }
-                        None => {
-                            slot.flying = false;
-                            let hidden = looks.items[i].hidden();
-                            looks.set(i, hidden);
-                        }
-                    }
-                }
-                end
-            })
-            .reduce(|| 0.0, f32::max)
-    }
-}
-
-/// Starts a transition when the wanted model differs from the one shown (once it is voxelized and the pool
-/// is big enough). Every voxel starts from where it is now; a running tween is replaced, never stacked. While a
-/// voxelization setting is dragged the transition is instant: `step`, next in the chain, lands every voxel.
+/// Starts a transition when the wanted model differs from the one shown (once it is voxelized, its layout is
+/// made and the pool is big enough): its voxels take off from where they are ([`take_off`]); a running tween is
+/// replaced, never stacked. While a voxelization setting is dragged the transition is instant: `step` lands
+/// every voxel that took off.
 fn start(
     mut commands: Commands,
     mut pool: ResMut<VoxelPool>,
-    mut looks: ResMut<GpuVoxels>,
+    looks: Res<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
     clock: Res<GpuClock>,
     mut active: ResMut<ActiveTransition>,
+    mut takeoff: ResMut<Takeoff>,
     mut started: MessageWriter<TransitionStarted>,
     mut reassemble: MessageReader<Reassemble>,
-    library: Res<ModelLibrary>,
-    models: Res<Assets<VoxelModelAsset>>,
-    settings: Res<VoxelSettings>,
-    transition: Res<TransitionSettings>,
-    drag: Res<SettingDrag>,
+    (library, models): (Res<ModelLibrary>, Res<Assets<VoxelModelAsset>>),
+    (settings, transition, drag): (Res<VoxelSettings>, Res<TransitionSettings>, Res<SettingDrag>),
     model_tweens: Query<Entity, With<ModelTween>>,
     (mut layouts, mut changed, mut recolored): (
         ResMut<Layouts>,
         MessageReader<AssetEvent<VoxelModelAsset>>,
         MessageReader<Recolored>,
     ),
-    (mut last_look, mut now): (Local<Option<(f32, bool)>>, Local<Vec<SlotState>>),
+    (mut last_look, mut restart): (Local<Option<(f32, bool)>>, Local<bool>),
 ) {
     layouts.forget(&mut changed);
     recolored.read().for_each(|r| layouts.forget_model(r.model));
-    let restart = reassemble.read().count() > 0;
+    *restart |= reassemble.read().count() > 0;
     let Some((id, model)) = library.current_ready(&models) else { return };
     // A new box size or the hollow switch lays the model out again.
     let look = (settings.box_size, settings.hollow);
     let relook = last_look.is_some_and(|l| l != look);
-    if (pool.shown == Some(id) && !relook && !restart) || pool.slots.len() < drawn_count(model, settings.hollow) {
+    if (pool.shown == Some(id) && !relook && !*restart) || pool.slots.len() < drawn_count(model, settings.hollow) {
         return;
     }
-    *last_look = Some(look);
     let transition = if drag.0 { transition.instant() } else { transition.clone() };
-    let new = layouts.of(id, model, &settings, &transition);
-    // Where every voxel is drawn now (in flight or not), in the cloud's frame, where tweens run.
-    let turn = Turn::new(active.turn());
-    tweens.drawn_into(
-        &pool,
-        &looks.items,
-        &clock,
-        |v| (turn.unturn(v.position()), v.scale(), v.color, v.shows()),
-        &mut now,
-    );
-    // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a
-    // joining one not yet shown, is picked up where it is).
-    let old_count = now.iter().rposition(|s| s.3).map_or(0, |last| last + 1);
-    let flights = Flights {
-        old: &now[..old_count],
-        new: &new,
-        settings: &transition,
-        start: clock.time,
-        // Each voxel lands on its look, in the model turned by the whole spin.
-        landed: Turn::new(Quat::from_rotation_y(active.angle + transition.spin_angle)),
-        seed: active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17),
-    };
+    // A big layout is sorted in a task: the morph starts once it is ready.
+    let Some(new) = layouts.ready(id, model, &settings, &transition) else { return };
+    (*last_look, *restart) = (Some(look), false);
+    // Everything up to the last voxel that shows now takes part (a surplus voxel still hiding, or a joining one
+    // not yet shown, is picked up where it is).
+    let old_count = tweens.showing(&pool, &looks.items, &clock);
+    let reach = looks.items[..pool.slots.len()].iter().rposition(GpuVoxel::shows).map_or(0, |last| last + 1);
+    let (spin_angle, spin_duration, count_duration) =
+        (transition.spin_angle, transition.spin_duration, transition.count_duration);
+    let new_count = new.len();
     tweens.reserve(pool.slots.len());
-    let end = flights.plan_all(&mut pool, &now, &mut looks, &mut tweens);
-    pool.rehome();
+    takeoff.begin(Flights {
+        old_count,
+        reach,
+        new,
+        // Each voxel lands on its look, in the model turned by the whole spin.
+        landed: Turn::new(Quat::from_rotation_y(active.angle + spin_angle)),
+        seed: active.count.wrapping_mul(0x9e37_79b9).wrapping_add(17),
+        began: clock.time,
+        settings: transition,
+    });
     // The model-level tweens: the spin and the visible count (the last transition's are replaced).
     for tween in &model_tweens {
         commands.entity(tween).despawn();
     }
     let angle = active.angle;
-    let spin = ModelLens::Spin { from: angle, to: angle + transition.spin_angle };
-    spawn_model_tween(&mut commands, &mut active, EaseFunction::QuadraticOut, transition.spin_duration, spin);
-    let count = ModelLens::Count { from: old_count as f32, to: new.len() as f32 };
-    spawn_model_tween(&mut commands, &mut active, EaseFunction::Linear, transition.count_duration, count);
+    let spin = ModelLens::Spin { from: angle, to: angle + spin_angle };
+    spawn_model_tween(&mut commands, &mut active, EaseFunction::QuadraticOut, spin_duration, spin);
+    let count = ModelLens::Count { from: old_count as f32, to: new_count as f32 };
+    spawn_model_tween(&mut commands, &mut active, EaseFunction::Linear, count_duration, count);
     pool.shown = Some(id);
-    pool.visible = new.len();
+    pool.visible = new_count;
     active.count += 1;
-    active.running = Some((id, end));
+    active.running = Some((id, 0.0));
     active.elapsed = 0.0;
     started.write(TransitionStarted { model: id });
 }
 
+/// The next batch of the starting morph's voxels takes off (all of them when there are at most
+/// [`takeoff::CHUNKS_PER_FRAME`] chunks); the morph ends when the last of them lands.
+fn take_off(
+    mut pool: ResMut<VoxelPool>,
+    mut looks: ResMut<GpuVoxels>,
+    mut tweens: ResMut<VoxelTweens>,
+    clock: Res<GpuClock>,
+    mut active: ResMut<ActiveTransition>,
+    mut takeoff: ResMut<Takeoff>,
+) {
+    if takeoff.is_over() {
+        return;
+    }
+    let turn = Turn::new(active.turn());
+    let end = takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &clock, turn);
+    if let Some((_, last)) = &mut active.running {
+        *last = last.max(end);
+    }
+}
+
 /// Moves the flight clock on (after the model-level tweens: the spin and the visible count are this frame's)
-/// and lands the voxels whose flights are over; the GPU draws the rest from their tweens.
+/// and lands the voxels whose flights are over; the GPU draws the rest from their tweens. The morph is over
+/// once every voxel has taken off and landed.
 fn step(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
@@ -515,6 +314,7 @@ fn step(
     mut pool: ResMut<VoxelPool>,
     mut tweens: ResMut<VoxelTweens>,
     mut clock: ResMut<GpuClock>,
+    takeoff: Res<Takeoff>,
     mut cloud: Query<&mut Transform, With<VoxelCloud>>,
 ) {
     let dt = time.delta_secs() * settings.speed;
@@ -528,6 +328,7 @@ fn step(
     tweens.land(&mut pool, clock.time);
     if let Some((model, end)) = active.running
         && active.elapsed >= end
+        && takeoff.is_over()
     {
         active.running = None;
         finished.write(TransitionFinished { model });
@@ -589,6 +390,7 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<TransitionSettings>();
     app.init_resource::<ActiveTransition>();
     app.init_resource::<Layouts>();
+    app.init_resource::<Takeoff>();
     app.add_message::<TransitionStarted>();
     app.add_message::<Reassemble>();
     app.add_message::<TransitionFinished>();
@@ -601,27 +403,10 @@ pub(super) fn plugin(app: &mut App) {
             placeholder.in_set(TransitionSystems::Placeholder),
             float_placeholder.in_set(TransitionSystems::Float),
             start.in_set(TransitionSystems::Start),
+            take_off.in_set(TransitionSystems::TakeOff),
             pace.in_set(TransitionSystems::Pace),
             step.in_set(TransitionSystems::Step),
             show_recolored.in_set(TransitionSystems::Recolor),
         ),
     );
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn orders_put_layers_and_neighbourhoods_together() {
-        let mut t: Vec<VoxelTarget> = [[0.0, 2.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 1.0]]
-            .map(|p| VoxelTarget { position: Vec3::from(p), scale: Vec3::ONE, color: [0; 4], part: 0 })
-            .to_vec();
-        order_targets(&mut t, Assignment::Height);
-        assert_eq!(t.iter().map(|t| t.position.y).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0]);
-        assert_eq!(morton(Vec3::ZERO, Vec3::ZERO, 1.0), 0);
-        assert!(
-            morton(Vec3::new(0.01, 0.01, 0.01), Vec3::ZERO, 1.0) < morton(Vec3::new(0.9, 0.0, 0.0), Vec3::ZERO, 1.0)
-        );
-    }
 }
