@@ -1,5 +1,5 @@
 //! Layouts: a model's voxels in the order the morph hands them to slots (slot i of the old layout flies to rank
-//! i of the new one), and the few kept for reuse. A big layout is sorted off the frame, in a task.
+//! i of the new one), and the few kept for reuse. A big layout is made off the frame, in a task.
 
 use std::sync::Arc;
 
@@ -69,16 +69,16 @@ pub fn layout(model: &VoxelModelAsset, settings: &VoxelSettings, transition: &Tr
 /// What a layout depends on besides its model's contents: the model, the box size, hollow, the assignment.
 type LayoutKey = (AssetId<VoxelModelAsset>, u32, bool, Assignment);
 
-/// Layouts of more voxels than this are sorted in a task, off the frame (a million take 0.2–0.3 s on two cores);
+/// Layouts of more voxels than this are made in a task, off the frame (a million take 0.2–0.3 s on two cores);
 /// smaller ones in the frame that asks.
-pub const SORTED_OFF_FRAME_ABOVE: usize = 1 << 16;
+pub const MADE_OFF_FRAME_ABOVE: usize = 1 << 16;
 
 /// The last few layouts made (a morph back to a model, a recolour and the animation's map reuse them), each
-/// forgotten when its model changes, and the big one being sorted.
+/// forgotten when its model changes, and the big one being made.
 #[derive(Resource, Default)]
 pub struct Layouts {
     kept: Vec<(LayoutKey, Arc<[VoxelTarget]>)>,
-    sorting: Option<(LayoutKey, Task<Arc<[VoxelTarget]>>)>,
+    making: Option<(LayoutKey, Task<Arc<[VoxelTarget]>>)>,
 }
 
 impl Layouts {
@@ -116,8 +116,8 @@ impl Layouts {
         self.kept(key).unwrap_or_else(|| self.keep(key, layout(model, settings, transition).into()))
     }
 
-    /// Model `id`'s layout if it is ready: kept, small enough to make now, or sorted by the task an earlier call
-    /// started (`None` while a task sorts it; asking for another layout drops that task).
+    /// Model `id`'s layout if it is ready: kept, small enough to make now, or made by the task an earlier call
+    /// started (`None` while a task makes it; asking for another layout drops that task).
     pub fn ready(
         &mut self,
         id: AssetId<VoxelModelAsset>,
@@ -129,24 +129,20 @@ impl Layouts {
         if let Some(kept) = self.kept(key) {
             return Some(kept);
         }
-        if let Some((sorted, task)) = &mut self.sorting
-            && *sorted == key
+        if let Some((making, task)) = &mut self.making
+            && *making == key
         {
             let made = check_ready(task)?;
-            self.sorting = None;
+            self.making = None;
             return Some(self.keep(key, made));
         }
-        let mut targets = targets_for(model, settings.box_size, settings.hollow);
-        if targets.len() <= SORTED_OFF_FRAME_ABOVE {
-            order_targets(&mut targets, transition.assignment);
-            return Some(self.keep(key, targets.into()));
+        if model.shown_count(settings.hollow) <= MADE_OFF_FRAME_ABOVE {
+            return Some(self.keep(key, layout(model, settings, transition).into()));
         }
-        let assignment = transition.assignment;
-        let sort = async move {
-            job_pool().install(|| order_targets(&mut targets, assignment));
-            Arc::from(targets)
-        };
-        self.sorting = Some((key, AsyncComputeTaskPool::get().spawn(sort)));
+        // The model is a bit a cell and its visible cells' colours: a copy is cheap next to its layout.
+        let (model, settings, transition) = (model.clone(), settings.clone(), transition.clone());
+        let sort = async move { job_pool().install(|| Arc::from(layout(&model, &settings, &transition))) };
+        self.making = Some((key, AsyncComputeTaskPool::get().spawn(sort)));
         None
     }
 
@@ -159,12 +155,12 @@ impl Layouts {
         }
     }
 
-    /// Forgets model `id`'s layouts, the one being sorted too (its colours changed this frame: its asset event
+    /// Forgets model `id`'s layouts, the one being made too (its colours changed this frame: its asset event
     /// comes later).
     pub(super) fn forget_model(&mut self, id: AssetId<VoxelModelAsset>) {
         self.kept.retain(|((model, ..), _)| *model != id);
-        if self.sorting.as_ref().is_some_and(|((model, ..), _)| *model == id) {
-            self.sorting = None;
+        if self.making.as_ref().is_some_and(|((model, ..), _)| *model == id) {
+            self.making = None;
         }
     }
 }
@@ -187,7 +183,7 @@ mod tests {
     }
 
     #[test]
-    fn a_big_layout_is_sorted_in_a_task_then_kept() {
+    fn a_big_layout_is_made_in_a_task_then_kept() {
         use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, shapes::cuboid, voxelize};
         AsyncComputeTaskPool::get_or_init(bevy::tasks::TaskPool::default);
         let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
@@ -197,7 +193,7 @@ mod tests {
         let transition = TransitionSettings::default();
         let id = AssetId::<VoxelModelAsset>::default();
         let mut layouts = Layouts::default();
-        assert!(model.shown_count(false) > SORTED_OFF_FRAME_ABOVE);
+        assert!(model.shown_count(false) > MADE_OFF_FRAME_ABOVE);
         assert!(layouts.ready(id, &model, &settings, &transition).is_none(), "the first ask starts the task");
         let made = (0..10_000)
             .find_map(|_| {
