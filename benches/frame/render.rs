@@ -1,4 +1,5 @@
-//! `cargo bench --bench frame -- render [SCENARIO…] [100k|1m]`: a whole frame's CPU cost with Bevy's renderer.
+//! `cargo bench --bench frame -- render [SCENARIO…] [100k|1m] [alone]`: a whole frame's CPU cost with Bevy's
+//! renderer.
 //!
 //! Each case is the app's own plugins (`DefaultPlugins` without winit and without a window, the voxel material,
 //! the `LogicPlugin`) with the renderer on wgpu's no-op backend: GPU commands cost nothing, every CPU cost
@@ -101,11 +102,11 @@ fn triangles(app: &mut App) -> u64 {
     voxel_art::instancing::triangles_per_frame(app.world_mut()) * 2
 }
 
-/// Milliseconds of `frames` updates of `case` and of `empty`, stepped in turn; `each` runs before every frame
+/// Milliseconds of `frames` updates of `case` and of `empty` (if any), stepped in turn; `each` runs before every frame
 /// of the case (with the frame's number).
 fn interleaved(
     case: &mut App,
-    empty: &mut App,
+    mut empty: Option<&mut App>,
     frames: usize,
     mut each: impl FnMut(&mut App, usize),
 ) -> (Vec<f64>, Vec<f64>, u64) {
@@ -116,7 +117,9 @@ fn interleaved(
     };
     let (mut case_ms, mut empty_ms, mut most) = (Vec::new(), Vec::new(), 0);
     for frame in 0..frames {
-        empty_ms.push(time(empty));
+        if let Some(empty) = empty.as_deref_mut() {
+            empty_ms.push(time(empty));
+        }
         each(case, frame);
         case_ms.push(time(case));
         most = most.max(triangles(case));
@@ -172,7 +175,8 @@ pub fn run() {
 }
 
 fn run_case(scenario: &str, model: &voxel_core::VoxelModel, resolution: u32) {
-    let mut empty = render_app(Vec::new(), Style::RoundedBoxes);
+    // `alone`: no empty app beside the case (the process's peak memory is then the case's own).
+    let mut empty = (!std::env::args().any(|a| a == "alone")).then(|| render_app(Vec::new(), Style::RoundedBoxes));
     let style = match scenario {
         "bubbles" => Style::Bubbles,
         "falling" => Style::Falling,
@@ -183,18 +187,20 @@ fn run_case(scenario: &str, model: &voxel_core::VoxelModel, resolution: u32) {
     let voxels = shown(&case);
     let (ms, empty_ms, tris) = match scenario {
         // A morph every 60 frames (one second): the median is mid-morph, the worst the frame that starts one.
-        "morph" => interleaved(&mut case, &mut empty, FRAMES, |app, frame| {
+        "morph" => interleaved(&mut case, empty.as_mut(), FRAMES, |app, frame| {
             if frame % 60 == 0 {
                 app.world_mut().write_message(voxel_art::library::LibraryRequest::Next);
             }
         }),
         "repel" | "bubbles" => {
             case.add_systems(First, super::circling_cursor);
-            interleaved(&mut case, &mut empty, FRAMES, |_, _| {})
+            interleaved(&mut case, empty.as_mut(), FRAMES, |_, _| {})
         }
-        _ => interleaved(&mut case, &mut empty, FRAMES, |_, _| {}),
+        _ => interleaved(&mut case, empty.as_mut(), FRAMES, |_, _| {}),
     };
-    report("empty", 0, &empty_ms, 0);
+    if !empty_ms.is_empty() {
+        report("empty", 0, &empty_ms, 0);
+    }
     report(scenario, voxels, &ms, tris);
     let running = case.world().resource::<ActiveTransition>().running.is_some();
     if scenario == "morph" {

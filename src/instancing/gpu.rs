@@ -181,14 +181,17 @@ impl<T: Record> Mirror<T> {
         }
     }
 
-    /// Makes room for `slots` records: whole chunks, doubling (the buffer is replaced at the next gather).
+    /// Makes room for `slots` records: whole chunks and an eighth more (the buffer is replaced at the next gather;
+    /// a pool grows seldom, to the largest model shown, so its buffers are not doubled: at a million voxels
+    /// doubling would hold a million spare looks and tweens on both sides).
     pub fn reserve(&mut self, slots: usize) {
         if slots <= self.items.len() {
             return;
         }
         // One storage binding holds at most 128 MiB (the pool's cap keeps slots within it for every record).
         let most = (128 << 20) / size_of::<T>() / VOXELS_PER_CHUNK * VOXELS_PER_CHUNK;
-        let chunks = slots.div_ceil(VOXELS_PER_CHUNK).max(1).next_power_of_two();
+        let needed = slots.div_ceil(VOXELS_PER_CHUNK).max(1);
+        let chunks = needed + needed / 8;
         let len = (chunks * VOXELS_PER_CHUNK).min(most);
         self.items.resize(len, T::default());
         self.weights.resize(len / VOXELS_PER_CHUNK, 0.0);
@@ -481,7 +484,10 @@ mod tests {
     fn only_changed_chunks_are_uploaded_and_empty_chunks_are_not_drawn() {
         let mut gpu = GpuVoxels::default();
         gpu.reserve(3 * VOXELS_PER_CHUNK + 1);
-        assert_eq!(gpu.items.len(), 4 * VOXELS_PER_CHUNK, "whole chunks, doubling");
+        assert_eq!(gpu.items.len(), 4 * VOXELS_PER_CHUNK, "whole chunks");
+        let mut big = GpuVoxels::default();
+        big.reserve(800 * VOXELS_PER_CHUNK);
+        assert_eq!(big.items.len(), 900 * VOXELS_PER_CHUNK, "and an eighth more");
         let shown = GpuVoxel { scale_y: 1.0, ..GpuVoxel::default() };
         gpu.set(5, shown);
         gpu.set(VOXELS_PER_CHUNK + 7, shown);
