@@ -206,8 +206,8 @@ fn run_case(scenario: &str, model: &voxel_core::VoxelModel, resolution: u32) {
     if scenario == "morph" {
         let worst = |frames: &[f64]| frames.iter().copied().fold(0.0, f64::max);
         println!(
-            "  worst frame of the first morph (the pool grows to the cube's count): {:.1} ms; of the later ones: \
-             {:.1} ms; a transition running at the end: {running}",
+            "  worst frame of the first morph (the cube's layout made in a task): {:.1} ms; of the later ones: {:.1} \
+             ms; a transition running at the end: {running}",
             worst(&ms[..60]),
             worst(&ms[60..])
         );
