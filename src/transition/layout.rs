@@ -117,7 +117,7 @@ impl Layouts {
     }
 
     /// Model `id`'s layout if it is ready: kept, small enough to make now, or made by the task an earlier call
-    /// started (`None` while a task makes it; asking for another layout drops that task).
+    /// started (`None` while a task makes it; a task for another big layout replaces it).
     pub fn ready(
         &mut self,
         id: AssetId<VoxelModelAsset>,
