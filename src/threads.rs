@@ -7,11 +7,16 @@
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
 //!   spread their work over every core;
 //! - voxelization jobs run their parallel work in a pool of their own that leaves a core to the frame
-//!   ([`job_pool`]): a big model's seconds of voxelizing never take the core a frame's systems run on.
+//!   ([`job_pool`]): a big model's seconds of voxelizing never take the core a frame's systems run on. A job
+//!   is handed to that pool, not run from an async-compute thread ([`spawn_job`]): the async-compute pool has
+//!   one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited for by frames.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use bevy::app::{TaskPoolOptions, TaskPoolPlugin};
 use bevy::ecs::schedule::{Schedules, SingleThreadedExecutor};
 use bevy::prelude::*;
+use bevy::tasks::{AsyncComputeTaskPool, Task};
 
 /// Machines with this many cores or fewer run the main schedules single-threaded.
 pub const SINGLE_THREADED_UP_TO: usize = 2;
@@ -32,6 +37,17 @@ pub fn job_pool() -> &'static rayon::ThreadPool {
         let builder = rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|i| format!("voxelize-{i}"));
         builder.build().expect("the operating system starts the voxelization threads")
     })
+}
+
+/// Runs `work` in [`job_pool`]; the returned task (on the async-compute pool) waits for its result without
+/// holding a thread, and yields `None` if the work panicked.
+pub fn spawn_job<T: Send + 'static>(work: impl FnOnce() -> T + Send + 'static) -> Task<Option<T>> {
+    let (sender, receiver) = async_channel::bounded(1);
+    job_pool().spawn(move || {
+        // The receiver is gone when the job's task was dropped (a stale job): nothing waits for the result.
+        let _ = sender.send_blocking(catch_unwind(AssertUnwindSafe(work)));
+    });
+    AsyncComputeTaskPool::get().spawn(async move { receiver.recv().await.ok()?.ok() })
 }
 
 /// Whether a machine with `cores` cores runs the main schedules single-threaded.

@@ -1,5 +1,5 @@
 //! `cargo bench --bench frame -- render [SCENARIO…] [100k|1m] [alone]`: a whole frame's CPU cost with Bevy's
-//! renderer.
+//! renderer; `render load`: the frames while a 100 MB file loads.
 //!
 //! Each case is the app's own plugins (`DefaultPlugins` without winit and without a window, the voxel material,
 //! the `LogicPlugin`) with the renderer on wgpu's no-op backend: GPU commands cost nothing, every CPU cost
@@ -17,6 +17,7 @@ use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
 use bevy::time::TimeUpdateStrategy;
+use voxel_art::config::AppArgs;
 use voxel_art::instancing::VoxelPool;
 use voxel_art::model::{ModelLibrary, VoxelModelAsset};
 use voxel_art::style::Style;
@@ -24,16 +25,18 @@ use voxel_art::transition::ActiveTransition;
 use voxel_core::shapes::uv_sphere;
 use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, voxelize};
 
+#[path = "../../crates/voxel-core/tests/support/scenes.rs"]
+mod scenes;
+
 /// Frames measured per case.
 const FRAMES: usize = 300;
 
-/// The app's plugins with the renderer on the no-op backend, a camera rendering into an image and the key
-/// light; `models` in its library (the first shown), in `style`.
-fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
+/// The app's plugins as `args` configure them, with the renderer on the no-op backend, a camera rendering into
+/// an image and the key light, after its first frame.
+fn bare_app(args: AppArgs) -> App {
     let mut app = App::new();
     let plugins = voxel_art::noop::default_plugins(&mut app);
     app.add_plugins(plugins);
-    let args = voxel_art::config::AppArgs { no_shipped: true, style: Some(style), ..Default::default() };
     args.configure(&mut app);
     app.add_plugins(voxel_art::instancing::render_plugin);
     app.add_plugins(voxel_art::LogicPlugin);
@@ -44,8 +47,14 @@ fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
     }
     app.finish();
     app.cleanup();
-    app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().hollow = false;
     app.update();
+    app
+}
+
+/// [`bare_app`] with `models` in its library (the first shown, solid), in `style`.
+fn render_app(models: Vec<voxel_core::VoxelModel>, style: Style) -> App {
+    let mut app = bare_app(AppArgs { no_shipped: true, style: Some(style), ..Default::default() });
+    app.world_mut().resource_mut::<voxel_art::settings::VoxelSettings>().hollow = false;
     if !models.is_empty() {
         let handles: Vec<_> = models
             .into_iter()
@@ -156,6 +165,10 @@ const SIZES: [&str; 2] = ["100k", "1m"];
 /// Runs the render cases asked for.
 pub fn run() {
     println!("render: threads {}", bevy::tasks::available_parallelism());
+    if std::env::args().any(|a| a == "load") {
+        run_load();
+        return;
+    }
     for (size, resolution) in [("100k", 58), ("1m", 126)] {
         if !asked(size, &SIZES) {
             continue;
@@ -218,4 +231,33 @@ fn run_case(scenario: &str, model: &voxel_core::VoxelModel, resolution: u32) {
         };
         println!("  median of the frames taking off: {:.2} ms; of the rest: {:.2} ms", median(true), median(false));
     }
+}
+
+/// `render load`: every frame while the app reads, voxelizes and shows a 100 MB file dropped on it (4M
+/// triangles of overlapping vertex-coloured spheres, generated: the `big` bench's spheres-4m), from the drop
+/// until its model has settled, stepped in turn with `empty`. The app has run 120 frames first (its pipelines
+/// made, the placeholder boxes floating).
+fn run_load() {
+    let dir = std::env::temp_dir().join("voxel-art-load");
+    std::fs::create_dir_all(&dir).expect("a folder for the file");
+    let path = dir.join("spheres-4m.glb");
+    std::fs::write(&path, scenes::to_glb(&scenes::spheres(4096))).expect("write the file");
+    let megabytes = std::fs::metadata(&path).map_or(0, |m| m.len()) as f64 / 1e6;
+    let mut empty = render_app(Vec::new(), Style::RoundedBoxes);
+    let mut case = bare_app(AppArgs { no_shipped: true, ..Default::default() });
+    interleaved(&mut case, Some(&mut empty), 120, |_, _| {});
+    case.world_mut().write_message(voxel_art::library::LibraryRequest::Add(path));
+    let (started, limit) = (Instant::now(), std::time::Duration::from_secs(600));
+    let (mut ms, mut empty_ms) = (Vec::new(), Vec::new());
+    while !super::settled(&case) && started.elapsed() < limit {
+        let (frame, empty_frame, _) = interleaved(&mut case, Some(&mut empty), 1, |_, _| {});
+        ms.extend(frame);
+        empty_ms.extend(empty_frame);
+    }
+    assert!(super::settled(&case), "the file was not shown within {limit:?}");
+    report("empty", 0, &empty_ms, 0);
+    let triangles = triangles(&mut case);
+    report(&format!("load ({megabytes:.0} MB file)"), shown(&case), &ms, triangles);
+    let seconds = started.elapsed().as_secs_f64();
+    println!("  {} frames in {seconds:.1} s from the drop to the model settled on screen", ms.len());
 }

@@ -4,15 +4,15 @@
 use std::sync::Arc;
 
 use bevy::prelude::*;
+use bevy::tasks::Task;
 use bevy::tasks::futures::check_ready;
-use bevy::tasks::{AsyncComputeTaskPool, Task};
 use rayon::prelude::*;
 
 use super::{Assignment, TransitionSettings};
 use crate::instancing::{VoxelTarget, targets_for};
 use crate::model::VoxelModelAsset;
 use crate::settings::VoxelSettings;
-use crate::threads::job_pool;
+use crate::threads::spawn_job;
 
 /// A 3D Morton code of a cell-ish position (10 bits per axis).
 fn morton(p: Vec3, lo: Vec3, size: f32) -> u32 {
@@ -78,7 +78,7 @@ pub const MADE_OFF_FRAME_ABOVE: usize = 1 << 16;
 #[derive(Resource, Default)]
 pub struct Layouts {
     kept: Vec<(LayoutKey, Arc<[VoxelTarget]>)>,
-    making: Option<(LayoutKey, Task<Arc<[VoxelTarget]>>)>,
+    making: Option<(LayoutKey, Task<Option<Arc<[VoxelTarget]>>>)>,
 }
 
 impl Layouts {
@@ -134,6 +134,8 @@ impl Layouts {
         {
             let made = check_ready(task)?;
             self.making = None;
+            // (A task that panicked leaves the layout to this frame.)
+            let made = made.unwrap_or_else(|| layout(model, settings, transition).into());
             return Some(self.keep(key, made));
         }
         if model.shown_count(settings.hollow) <= MADE_OFF_FRAME_ABOVE {
@@ -141,8 +143,7 @@ impl Layouts {
         }
         // The model is a bit a cell and its visible cells' colours: a copy is cheap next to its layout.
         let (model, settings, transition) = (model.clone(), settings.clone(), transition.clone());
-        let sort = async move { job_pool().install(|| Arc::from(layout(&model, &settings, &transition))) };
-        self.making = Some((key, AsyncComputeTaskPool::get().spawn(sort)));
+        self.making = Some((key, spawn_job(move || Arc::from(layout(&model, &settings, &transition)))));
         None
     }
 
@@ -185,7 +186,7 @@ mod tests {
     #[test]
     fn a_big_layout_is_made_in_a_task_then_kept() {
         use voxel_core::{GridSize, TriangleSoup, VoxelizeOptions, shapes::cuboid, voxelize};
-        AsyncComputeTaskPool::get_or_init(bevy::tasks::TaskPool::default);
+        bevy::tasks::AsyncComputeTaskPool::get_or_init(bevy::tasks::TaskPool::default);
         let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [0.5, 0.6, 0.9, 1.0]);
         let options = VoxelizeOptions { grid: GridSize::Resolution(42), hollow: false, ..Default::default() };
         let model = VoxelModelAsset(voxelize(&soup, &options).expect("a cube voxelizes"));

@@ -1,10 +1,10 @@
-//! Voxelization in the app, on the `AsyncComputeTaskPool`: the file → the core's importer (the same reader
+//! Voxelization in the app, off the frame: the file → the core's importer (the same reader
 //! as the CLI, so the app and the CLI give the same cells and colours) → triangle soup, kept for later
 //! settings → the core voxelizer → [`VoxelModelAsset`]s. A file with animation clips keeps its animation from
 //! the same read (the `animation` plugin poses it); a static file costs what it did. A settings change
 //! re-voxelizes every model, the one on screen first, and while a setting is dragged ([`SettingDrag`]) only that
 //! one; a stale job is cancelled (the core stops at its next stage) and its result dropped (latest wins). Jobs
-//! run their parallel work in [`job_pool`], which leaves a core to the frame, and report their stage to the
+//! run in [`job_pool`](crate::threads::job_pool), which leaves a core to the frame ([`spawn_job`]), and report their stage to the
 //! model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
 //! only; a file of more than [`TILE_TRIANGLES`] triangles is not read again: its tile shows the surface of
 //! its first voxels, meshed on the worker.
@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use bevy::asset::AssetPath;
 use bevy::prelude::*;
-use bevy::tasks::{AsyncComputeTaskPool, Task, futures::check_ready};
+use bevy::tasks::{Task, futures::check_ready};
 use voxel_core::{AnimatedModel, Progress, Stage, TriangleSoup, VoxelModel};
 
 use crate::model::surface::surface_mesh;
@@ -23,7 +23,7 @@ use crate::model::{ModelLibrary, ModelStatus, Playback, VoxelModelAsset};
 use crate::schedule::VoxelizeSystems;
 use crate::settings::{ColorSettings, SettingDrag, VoxelSettings};
 use crate::style::Style;
-use crate::threads::job_pool;
+use crate::threads::spawn_job;
 
 /// Files with more triangles than this get a preview tile from their voxels instead of Bevy's glTF loader:
 /// reading such a file again and uploading its mesh would stall frames.
@@ -44,7 +44,7 @@ pub struct VoxelizeJob {
     started: Instant,
     /// Shared with the task: its stage, and the request to stop.
     progress: Progress,
-    task: Task<JobResult>,
+    task: Task<Option<JobResult>>,
 }
 
 /// What a job hands back: what it read (or was given) and its voxels, or why the file failed.
@@ -68,23 +68,21 @@ enum JobInput {
 }
 
 impl JobInput {
-    /// Imports (if needed) and voxelizes in the job pool, reporting to `progress`.
+    /// Imports (if needed) and voxelizes (run in the job pool), reporting to `progress`.
     fn run(self, options: &voxel_core::VoxelizeOptions, progress: &Progress) -> JobResult {
         let first_read = matches!(self, JobInput::File(_));
-        job_pool().install(|| {
-            let mut imported = match self {
-                JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None, tile: None },
-                JobInput::File(path) => {
-                    progress.enter(Stage::Reading).map_err(|e| e.to_string())?;
-                    read(&path)?
-                }
-            };
-            let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
-            if first_read && imported.soup.triangle_count() > TILE_TRIANGLES {
-                imported.tile = Some(surface_mesh(&model));
+        let mut imported = match self {
+            JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None, tile: None },
+            JobInput::File(path) => {
+                progress.enter(Stage::Reading).map_err(|e| e.to_string())?;
+                read(&path)?
             }
-            Ok((imported, model))
-        })
+        };
+        let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
+        if first_read && imported.soup.triangle_count() > TILE_TRIANGLES {
+            imported.tile = Some(surface_mesh(&model));
+        }
+        Ok((imported, model))
     }
 }
 
@@ -114,7 +112,7 @@ fn track_settings(
 }
 
 /// Starts a job for every model whose voxels are missing or stale and that has no current job, the model on
-/// screen first (the async pool has one thread on a 2-core machine: what is spawned first runs first). While a
+/// screen first (the job pool has one thread on a 2-core machine: what is spawned first runs first). While a
 /// setting is dragged only the model on screen gets a job; the others wait, marked voxelizing, for the drag to
 /// end.
 fn start_jobs(
@@ -127,7 +125,6 @@ fn start_jobs(
     jobs: Query<(Entity, &VoxelizeJob)>,
 ) {
     let options = settings.voxelize_options(style.get().cell_height_ratio());
-    let pool = AsyncComputeTaskPool::get();
     let current = library.current;
     let order = std::iter::once(current).chain((0..library.entries.len()).filter(|&i| i != current));
     for i in order {
@@ -161,7 +158,7 @@ fn start_jobs(
         let progress = Progress::new();
         entry.progress = progress.clone();
         let watched = progress.clone();
-        let task = pool.spawn(async move { input.run(&options, &watched) });
+        let task = spawn_job(move || input.run(&options, &watched));
         commands.spawn(VoxelizeJob { entry: i, generation: generation.0, started: Instant::now(), progress, task });
     }
 }
@@ -180,7 +177,8 @@ fn finish_jobs(
     mut jobs: Query<(Entity, &mut VoxelizeJob)>,
 ) {
     for (entity, mut job) in &mut jobs {
-        let Some(mut result) = check_ready(&mut job.task) else { continue };
+        let Some(done) = check_ready(&mut job.task) else { continue };
+        let mut result = done.unwrap_or_else(|| Err("the voxelizer stopped unexpectedly".to_owned()));
         commands.entity(entity).despawn();
         if let (Ok((imported, _)), Some(entry)) = (&mut result, library.entries.get_mut(job.entry))
             && entry.soup.is_none()
