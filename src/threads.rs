@@ -69,3 +69,19 @@ pub fn choose_executor(app: &mut App) -> usize {
     }
     switched
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bevy::tasks::{TaskPool, block_on};
+
+    #[test]
+    fn a_job_hands_back_its_result_and_a_panic_as_none() {
+        AsyncComputeTaskPool::get_or_init(TaskPool::default);
+        let thread = block_on(spawn_job(|| std::thread::current().name().map(str::to_owned)));
+        let thread = thread.flatten().unwrap_or_default();
+        assert!(thread.starts_with("voxelize-"), "the work runs in the job pool, not on {thread:?}");
+        let panicked: Option<u32> = block_on(spawn_job(|| panic!("a malformed file the reader missed")));
+        assert_eq!(panicked, None, "a panic comes back as None, not into the caller");
+    }
+}
