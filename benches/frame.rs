@@ -153,7 +153,8 @@ fn main() {
         let mut app = app_with(vec![sphere]);
         app.add_systems(First, circling_cursor);
         let (mean, median) = measure(&mut app, 10, 300);
-        let displaced = app.world().resource::<VoxelPool>().slots.iter().filter(|s| !s.repel.is_rest()).count();
+        let now = app.world().resource::<voxel_art::instancing::GpuClock>().time;
+        let displaced = app.world().resource::<VoxelPool>().slots.iter().filter(|s| !s.repel.rests(now)).count();
         println!(
             "repel, cursor moving over 100k voxels ({displaced} displaced at the end): mean {mean:.2} ms/frame, median {median:.2} ms/frame"
         );

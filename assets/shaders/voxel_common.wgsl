@@ -3,9 +3,10 @@
 // (the chunk's index is its MeshTag, the box's is the vertex index over the vertices of one box). Bit 31 of the
 // tag says the chunk draws the low detail mesh: three faces (+x, +y, +z, four vertices each), each turned to the
 // side of the box that faces the viewer.
-// A voxel in flight (a morph, a pop) is drawn from its flight at the frame's clock (voxel_flight.wgsl).
+// A voxel in flight (a morph, a pop) is drawn from its flight at the frame's clock, one the cursor pushed from its
+// look moved by its repel spring (voxel_flight.wgsl).
 #import bevy_pbr::{mesh_bindings::mesh, mesh_functions, mesh_view_bindings::view, view_transformations::position_world_to_clip}
-#import "shaders/voxel_flight.wgsl"::{Voxel, Flight, Clock, flown}
+#import "shaders/voxel_flight.wgsl"::{Voxel, Flight, Clock, Spring, flown, sprung}
 
 struct ChunkLayout {
     vertices_per_voxel: u32,
@@ -17,6 +18,7 @@ struct ChunkLayout {
 @group(#{MATERIAL_BIND_GROUP}) @binding(101) var<uniform> chunk_layout: ChunkLayout;
 @group(#{MATERIAL_BIND_GROUP}) @binding(102) var<storage, read> flights: array<Flight>;
 @group(#{MATERIAL_BIND_GROUP}) @binding(103) var<storage, read> clock: Clock;
+@group(#{MATERIAL_BIND_GROUP}) @binding(104) var<storage, read> springs: array<Spring>;
 
 // A vertex of a chunk's mesh: its voxel, and which face of the low detail box to turn over (0: none, 1..3: the
 // x, y or z face).
@@ -50,6 +52,9 @@ fn box_vertex(instance_index: u32, vertex_index: u32) -> BoxVertex {
     let per_voxel = select(chunk_layout.vertices_per_voxel, chunk_layout.low_vertices_per_voxel, low);
     let slot = (tag & 0x7fffffffu) * chunk_layout.voxels_per_chunk + local / per_voxel;
     var voxel = voxels[slot];
+    if slot < arrayLength(&springs) {
+        voxel = sprung(voxel, springs[slot], clock);
+    }
     if slot < arrayLength(&flights) {
         voxel = flown(voxel, flights[slot], slot, clock);
     }

@@ -1,6 +1,7 @@
-// A voxel and its flight, evaluated on the GPU: the morph's per-voxel tween (back-out flight, colour switch,
-// visible count, the model's spin) as a function of the flight clock. Plain WGSL with no bindings, imported by
-// voxel_common.wgsl and, in the tests, run in a compute pass against the Rust curve (`transition::flown`).
+// A voxel, its flight and its repel spring, evaluated on the GPU as functions of the flight clock: the morph's
+// per-voxel tween (back-out flight, colour switch, visible count, the model's spin) and the critically damped
+// spring that brings a pushed voxel home. Plain WGSL with no bindings, imported by voxel_common.wgsl and, in the
+// tests, run in a compute pass against the Rust twins (`instancing::flown`, `GpuSpring::sprung`).
 
 // One voxel's look (32 bytes, `GpuVoxel` in src/instancing/gpu.rs). Voxels only turn about y: the box's x axis
 // in the xz plane (width × (cos, −sin)), its height and its depth place it; a hidden voxel has no size.
@@ -32,6 +33,18 @@ struct Flight {
     spare_a: u32,
     spare_b: u32,
 }
+
+// One voxel's repel spring (16 bytes, `GpuSpring` in src/instancing/spring.rs): offset and velocity in the
+// model's frame as half floats, at clock time `since`; free (returning home) from then on.
+struct Spring {
+    offset_xy: u32,
+    offset_z_velocity_x: u32,
+    velocity_yz: u32,
+    since: f32,
+}
+
+// The spring's stiffness (1/s², `STIFFNESS`); the damping is critical.
+const STIFFNESS: f32 = 140.0;
 
 // The flight clock of the frame (`FlightClock` in src/transition.rs): seconds, the model's angle about y and the
 // visible count.
@@ -73,5 +86,23 @@ fn flown(look: Voxel, f: Flight, slot: u32, clock: Clock) -> Voxel {
         v.scale_y = scale.y;
         v.scale_z = scale.z;
     }
+    return v;
+}
+
+// `look` moved by its spring at `clock`: (x₀ + (v₀ + ω x₀) τ) e^(−ω τ), τ seconds since the state (none while
+// held: `since` is the largest float), turned with the voxel.
+fn sprung(look: Voxel, spring: Spring, clock: Clock) -> Voxel {
+    let xy = unpack2x16float(spring.offset_xy);
+    let zx = unpack2x16float(spring.offset_z_velocity_x);
+    let yz = unpack2x16float(spring.velocity_yz);
+    let offset = vec3(xy, zx.x);
+    let velocity = vec3(zx.y, yz);
+    let w = sqrt(STIFFNESS);
+    let tau = max(clock.time - spring.since, 0.0);
+    let moved = (offset + (velocity + offset * w) * tau) * exp(-w * tau);
+    let width = length(look.x_axis);
+    let c = select(vec2(1.0, 0.0), look.x_axis / width, width > 0.0);
+    var v = look;
+    v.translation = look.translation + vec3(c.x * moved.x - c.y * moved.z, moved.y, c.x * moved.z + c.y * moved.x);
     return v;
 }

@@ -9,8 +9,8 @@ use std::collections::HashMap;
 use bevy::prelude::*;
 
 use crate::instancing::{
-    GpuClock, GpuVoxel, GpuVoxels, Slot, Turn, TweenShow, VoxelHome, VoxelPool, VoxelTarget, VoxelTween, VoxelTweens,
-    grow_pool, pack_color, targets_for,
+    GpuClock, GpuSprings, GpuVoxel, GpuVoxels, Slot, Turn, TweenShow, VoxelHome, VoxelPool, VoxelTarget, VoxelTween,
+    VoxelTweens, grow_pool, pack_color, targets_for,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::settings::VoxelSettings;
@@ -98,6 +98,7 @@ pub(super) fn follow(
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
+    mut springs: ResMut<GpuSprings>,
     clock: Res<GpuClock>,
     mut layouts: ResMut<Layouts>,
 ) {
@@ -135,6 +136,7 @@ pub(super) fn follow(
             return true;
         }
         let position = pool.slots[i].home.position;
+        springs.clear(i, &mut pool.slots[i]);
         tweens.fly(&mut pool, i, pop(position, look.scale(), Vec3::ZERO, look.color, clock.time));
         looks.set(i, look.hidden());
         pool.slots[i].vacant = true;

@@ -11,6 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 
 use super::gpu::{GpuVoxel, Mirror, Mirrored, Piece, Record};
+use super::spring::GpuSpring;
 use super::{VOXELS_PER_CHUNK, VoxelMaterial, VoxelPool};
 
 /// Back-out easing with overshoot `s` (the article's `back.out(3)`; Bevy's `BackOut` uses 1.70158).
@@ -225,13 +226,19 @@ impl VoxelTweens {
         (0..pool.slots.len()).rev().find(|&i| shows(i)).map_or(0, |last| last + 1)
     }
 
-    /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look).
-    pub fn drawn(&self, pool: &VoxelPool, looks: &[GpuVoxel], clock: &GpuClock) -> Vec<GpuVoxel> {
+    /// Every slot of `pool` as the GPU draws it at `clock` (its flight, else its look moved by its spring).
+    pub fn drawn(
+        &self,
+        pool: &VoxelPool,
+        looks: &[GpuVoxel],
+        springs: &[GpuSpring],
+        clock: &GpuClock,
+    ) -> Vec<GpuVoxel> {
         (0..pool.slots.len())
             .into_par_iter()
             .map(|i| match self.flight(pool, i, clock.time) {
                 Some(tween) => flown(&looks[i], tween, i, clock),
-                None => looks[i],
+                None => springs.get(i).map_or(looks[i], |s| s.sprung(&looks[i], clock.time)),
             })
             .collect()
     }

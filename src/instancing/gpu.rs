@@ -21,6 +21,7 @@ use rayon::prelude::*;
 
 use super::flight::{GpuClock, VoxelTweens};
 use super::material::ChunkLayout;
+use super::spring::GpuSprings;
 use super::{VoxelAssets, VoxelCloud, VoxelMaterial, VoxelPool, mesh::chunk_mesh};
 use crate::model::VoxelModelAsset;
 use crate::schedule::InstancingSystems;
@@ -444,17 +445,23 @@ pub(super) fn plugin(app: &mut App) {
         PostUpdate,
         (
             rebuild_chunk_meshes.in_set(InstancingSystems::Meshes),
-            (fit_buffer::<GpuVoxels>, fit_buffer::<VoxelTweens>).in_set(InstancingSystems::Buffer),
+            (fit_buffer::<GpuVoxels>, fit_buffer::<VoxelTweens>, fit_buffer::<GpuSprings>)
+                .in_set(InstancingSystems::Buffer),
             choose_detail.in_set(InstancingSystems::Detail),
             fit_chunks.in_set(InstancingSystems::Chunks),
         ),
     );
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else { return };
-    render_app.init_resource::<PendingUpload<GpuVoxels>>().init_resource::<PendingUpload<VoxelTweens>>();
-    render_app.add_systems(ExtractSchedule, (upload::<GpuVoxels>, upload::<VoxelTweens>, upload_clock));
+    render_app
+        .init_resource::<PendingUpload<GpuVoxels>>()
+        .init_resource::<PendingUpload<VoxelTweens>>()
+        .init_resource::<PendingUpload<GpuSprings>>();
+    render_app
+        .add_systems(ExtractSchedule, (upload::<GpuVoxels>, upload::<VoxelTweens>, upload::<GpuSprings>, upload_clock));
     render_app.add_systems(
         Render,
-        (upload_pending::<GpuVoxels>, upload_pending::<VoxelTweens>).in_set(InstancingSystems::Upload),
+        (upload_pending::<GpuVoxels>, upload_pending::<VoxelTweens>, upload_pending::<GpuSprings>)
+            .in_set(InstancingSystems::Upload),
     );
 }
 

@@ -1,4 +1,4 @@
-//! The voxel material: `StandardMaterial` extended with the voxels' storage buffers (looks, flights, clock). Its vertex shaders (the main
+//! The voxel material: `StandardMaterial` extended with the voxels' storage buffers (looks, flights, springs, clock). Its vertex shaders (the main
 //! pass and the prepass, which draws the light's shadow map) place each box of a chunk's mesh at its voxel:
 //! voxel = chunk (`MeshTag`) × boxes per chunk + vertex index / vertices per box.
 
@@ -49,6 +49,10 @@ pub struct VoxelExtension {
     /// The frame's flight clock ([`crate::instancing::GpuClock`]), written every frame.
     #[storage(103, read_only)]
     pub clock: Handle<ShaderBuffer>,
+    /// The voxels' repel springs ([`crate::instancing::GpuSpring`]s by pool slot), written while the cursor
+    /// pushes them.
+    #[storage(104, read_only)]
+    pub springs: Handle<ShaderBuffer>,
 }
 
 /// The voxel shader (vertex, prepass vertex and fragment entry points).
@@ -80,14 +84,15 @@ pub fn unpack_color(tag: u32) -> [u8; 4] {
     tag.to_le_bytes()
 }
 
-/// The material reading `voxels`, `flights` and `clock`: a soft plastic look.
+/// The material reading `voxels`, `flights`, `springs` and `clock`: a soft plastic look.
 pub fn voxel_material(
     voxels: Handle<ShaderBuffer>,
     flights: Handle<ShaderBuffer>,
+    springs: Handle<ShaderBuffer>,
     clock: Handle<ShaderBuffer>,
 ) -> VoxelMaterial {
     ExtendedMaterial {
         base: StandardMaterial { base_color: Color::WHITE, perceptual_roughness: 0.55, reflectance: 0.35, ..default() },
-        extension: VoxelExtension { voxels, layout: ChunkLayout::default(), flights, clock },
+        extension: VoxelExtension { voxels, layout: ChunkLayout::default(), flights, clock, springs },
     }
 }

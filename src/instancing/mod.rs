@@ -10,6 +10,7 @@ pub mod flight;
 pub mod gpu;
 pub mod material;
 pub mod mesh;
+pub mod spring;
 
 use bevy::color::Hsla;
 use bevy::math::{Mat3A, Vec3A};
@@ -19,6 +20,7 @@ use bevy::render::storage::ShaderBuffer;
 pub use flight::{GpuClock, TweenShow, VoxelTween, VoxelTweens, back_out, flown, in_flight};
 pub use gpu::{Detail, GpuVoxel, GpuVoxels, Mirror, Piece, VOXELS_PER_CHUNK, VoxelChunk, triangles_per_frame};
 pub use material::{ChunkLayout, VoxelExtension, VoxelMaterial, pack_color, unpack_color, voxel_material};
+pub use spring::{GpuSpring, GpuSprings, Spring};
 
 use voxel_core::Voxel;
 
@@ -62,8 +64,9 @@ impl FromWorld for VoxelAssets {
             |size| buffers.add(ShaderBuffer::with_size(size, bevy::asset::RenderAssetUsages::RENDER_WORLD));
         let voxels = buffer(VOXELS_PER_CHUNK * size_of::<GpuVoxel>());
         let flights = buffer(VOXELS_PER_CHUNK * size_of::<VoxelTween>());
+        let springs = buffer(VOXELS_PER_CHUNK * size_of::<GpuSpring>());
         let clock = buffer(size_of::<GpuClock>());
-        let mut material = voxel_material(voxels, flights, clock.clone());
+        let mut material = voxel_material(voxels, flights, springs, clock.clone());
         material.extension.layout = layout;
         let material = world.resource_mut::<Assets<VoxelMaterial>>().add(material);
         Self { mesh, low_mesh, chunk_mesh, low_chunk_mesh, material, clock }
@@ -113,8 +116,8 @@ impl Turn {
 pub struct Slot {
     /// Its cell in the model shown.
     pub home: VoxelHome,
-    /// Its repel spring.
-    pub repel: RepelOffset,
+    /// Its repel spring (the GPU draws it: see [`spring`]).
+    pub repel: Spring,
     /// Flying in a transition (or popping): the transition places it.
     pub flying: bool,
     /// Part of the falling pile: the pile places it.
@@ -177,15 +180,6 @@ pub struct VoxelHome {
     pub scale: Vec3,
     /// Source part index.
     pub part: u32,
-}
-
-/// Mouse-repel displacement of a voxel (in the cloud's frame, like its home) and its spring velocity.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RepelOffset {
-    /// Current displacement.
-    pub offset: Vec3,
-    /// Current velocity of the displacement.
-    pub velocity: Vec3,
 }
 
 /// The floor height under a model (a little below its lowest cell).
@@ -278,6 +272,7 @@ pub(super) fn plugin(app: &mut App) {
     app.init_resource::<VoxelPool>();
     app.init_resource::<GpuVoxels>();
     app.init_resource::<VoxelTweens>();
+    app.init_resource::<GpuSprings>();
     app.init_resource::<GpuClock>();
     app.init_resource::<VoxelAssets>();
     app.register_type::<VoxelCloud>();
@@ -285,7 +280,8 @@ pub(super) fn plugin(app: &mut App) {
     app.add_systems(Update, grow_for_current.in_set(InstancingSystems::Grow));
     app.add_systems(
         PostUpdate,
-        (gpu::gather::<GpuVoxels>, gpu::gather::<VoxelTweens>).in_set(InstancingSystems::Gather),
+        (gpu::gather::<GpuVoxels>, gpu::gather::<VoxelTweens>, gpu::gather::<GpuSprings>)
+            .in_set(InstancingSystems::Gather),
     );
 }
 

@@ -114,7 +114,7 @@ fn take_bubbles(
     let turn = Turn::new(active.turn());
     // A voxel in flight is placed by its tween; a vacant slot stays hidden.
     for (i, slot) in pool.slots.iter().enumerate().take(pool.visible).filter(|(_, s)| s.at_home()) {
-        let look = turn.place(slot.home.position + slot.repel.offset, slot.home.scale, looks.items[i].color);
+        let look = turn.place(slot.home.position, slot.home.scale, looks.items[i].color);
         looks.set(i, look);
     }
 }

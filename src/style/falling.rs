@@ -12,7 +12,8 @@ use crate::style::ToggleFall;
 use super::Style;
 
 use crate::instancing::{
-    GpuVoxel, GpuVoxels, MAX_DRAWN, Slot, Turn, VoxelHome, VoxelPool, floor_height, grow_pool, pack_color, voxel_target,
+    GpuClock, GpuSprings, GpuVoxel, GpuVoxels, MAX_DRAWN, Slot, Turn, VoxelHome, VoxelPool, floor_height, grow_pool,
+    pack_color, voxel_target,
 };
 use crate::model::{ModelLibrary, VoxelModelAsset};
 use crate::schedule::StyleSystems;
@@ -113,6 +114,8 @@ fn control(
     models: Res<Assets<VoxelModelAsset>>,
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
+    mut springs: ResMut<GpuSprings>,
+    clock: Res<GpuClock>,
     active: Res<ActiveTransition>,
     resting: Res<RestingOn>,
     mut requested: ResMut<FallRequested>,
@@ -157,15 +160,16 @@ fn control(
     };
     let needed = pool.visible + interior.len();
     grow_pool(&mut pool, &mut looks, needed);
-    // In slot order, so the pile does not depend on anything else.
+    // In slot order, so the pile does not depend on anything else; a voxel the cursor pushed falls from where it
+    // is.
+    let turn = Turn::new(active.turn());
     let shown: Vec<(u32, Vec3)> = (0..pool.slots.len())
         .filter(|&i| !pool.slots[i].flying && looks.items[i].shows())
-        .map(|i| (i as u32, looks.items[i].position()))
+        .map(|i| (i as u32, looks.items[i].position() + turn.rotation * pool.slots[i].repel.at(clock.time).0))
         .collect();
     if shown.is_empty() {
         return;
     }
-    let turn = Turn::new(active.turn());
     let first_spare = pool.visible;
     for (k, t) in interior.iter().enumerate() {
         let home = VoxelHome { position: t.position, scale: t.scale, part: t.part };
@@ -189,6 +193,7 @@ fn control(
         .enumerate()
         .map(|(i, &(slot, at))| {
             let body = i / clump;
+            springs.clear(slot as usize, &mut pool.slots[slot as usize]);
             pool.slots[slot as usize].falling = true;
             Falling { slot, body: body as u32, offset: at - members[body * clump].1 }
         })

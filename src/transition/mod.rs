@@ -25,8 +25,8 @@ pub use layout::{Layouts, layout, order_targets};
 pub use takeoff::{Flights, Takeoff};
 
 use crate::instancing::{
-    GpuClock, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, Turn, VoxelCloud, VoxelPool, VoxelTweens, apply_targets,
-    drawn_count, pack_color, placeholder_targets,
+    GpuClock, GpuSprings, GpuVoxel, GpuVoxels, PLACEHOLDER_COUNT, Turn, VoxelCloud, VoxelPool, VoxelTweens,
+    apply_targets, drawn_count, pack_color, placeholder_targets,
 };
 use crate::model::{ModelLibrary, Recolored, VoxelModelAsset};
 use crate::schedule::TransitionSystems;
@@ -289,6 +289,7 @@ fn take_off(
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
     mut tweens: ResMut<VoxelTweens>,
+    mut springs: ResMut<GpuSprings>,
     clock: Res<GpuClock>,
     mut active: ResMut<ActiveTransition>,
     mut takeoff: ResMut<Takeoff>,
@@ -297,7 +298,7 @@ fn take_off(
         return;
     }
     let turn = Turn::new(active.turn());
-    let end = takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &clock, turn);
+    let end = takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &mut springs, &clock, turn);
     if let Some((_, last)) = &mut active.running {
         *last = last.max(end);
     }

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::TransitionSettings;
 use crate::instancing::{
-    GpuClock, GpuVoxels, RepelOffset, Slot, Turn, TweenShow, VOXELS_PER_CHUNK, VoxelHome, VoxelPool, VoxelTarget,
+    GpuClock, GpuSprings, GpuVoxels, Slot, Turn, TweenShow, VOXELS_PER_CHUNK, VoxelHome, VoxelPool, VoxelTarget,
     VoxelTween, VoxelTweens, in_flight, pack_color,
 };
 use crate::rng::Rng;
@@ -123,8 +123,6 @@ impl Flights {
                 let mut end = 0.0f32;
                 for (i, (slot, state)) in slots.iter_mut().zip(from).enumerate() {
                     let index = looks.start + i;
-                    // The flight starts where the voxel is now, repel displacement included: that is spent.
-                    slot.repel = RepelOffset::default();
                     match plan(index, *state, self.old_count, &self.new, &self.settings, start, &mut rng) {
                         Some((tween, home)) => {
                             end = end.max(tween.end);
@@ -170,13 +168,14 @@ impl Takeoff {
     }
 
     /// Plans the next [`CHUNKS_PER_FRAME`] chunks' flights from where their voxels are drawn at `clock` (the
-    /// cloud turned by `turn`), starting now. Returns when the last of them lands, in seconds after the morph
-    /// began (0 when nothing takes off).
+    /// cloud turned by `turn`; a voxel the cursor pushed, where its spring has it), starting now. Returns when
+    /// the last of them lands, in seconds after the morph began (0 when nothing takes off).
     pub fn next_batch(
         &mut self,
         pool: &mut VoxelPool,
         looks: &mut GpuVoxels,
         tweens: &mut VoxelTweens,
+        springs: &mut GpuSprings,
         clock: &GpuClock,
         turn: Turn,
     ) -> f32 {
@@ -193,10 +192,15 @@ impl Takeoff {
             }
             None => {
                 let look = looks.items[i];
-                (turn.unturn(look.position()), look.scale(), look.color, look.shows())
+                let (pushed, _) = pool.slots[i].repel.at(clock.time);
+                (turn.unturn(look.position()) + pushed, look.scale(), look.color, look.shows())
             }
         };
-        slots.into_par_iter().map(|i| state(flights.source(i))).collect_into_vec(&mut self.from);
+        slots.clone().into_par_iter().map(|i| state(flights.source(i))).collect_into_vec(&mut self.from);
+        // The flights start where the voxels are, pushed or not: their springs are spent.
+        for i in slots {
+            springs.clear(i, &mut pool.slots[i]);
+        }
         let end = flights.plan_chunks(chunks.clone(), &self.from, pool, looks, tweens, clock.time);
         let ends = clock.time - flights.began + end;
         self.next = chunks.end;
@@ -246,7 +250,7 @@ mod tests {
         let mut ends = Vec::new();
         for frame in 0..3 {
             assert!(!takeoff.is_over(), "frame {frame}: voxels are still to take off");
-            ends.push(takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &clock, turn));
+            ends.push(takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &mut GpuSprings::default(), &clock, turn));
             let flying = pool.slots.iter().filter(|s| s.flying).count();
             assert_eq!(flying, ((frame + 1) * batch).min(new_count), "frame {frame}: one batch more flies");
             clock.time += 0.1;
@@ -280,7 +284,14 @@ mod tests {
         let new: Arc<[VoxelTarget]> = row(2000, 0.0, [1, 2, 3, 255]).into();
         let turn = Turn::new(Quat::IDENTITY);
         takeoff.begin(Flights { old_count: 0, reach: 0, new, settings, landed: turn, seed: 1, began: 0.0 });
-        let end = takeoff.next_batch(&mut pool, &mut looks, &mut tweens, &GpuClock::default(), turn);
+        let end = takeoff.next_batch(
+            &mut pool,
+            &mut looks,
+            &mut tweens,
+            &mut GpuSprings::default(),
+            &GpuClock::default(),
+            turn,
+        );
         assert!(takeoff.is_over() && end == 0.0, "an instant morph of 2,000 voxels is over in its first frame");
         assert_eq!(pool.slots.iter().filter(|s| s.flying).count(), 2000);
     }

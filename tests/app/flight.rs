@@ -1,16 +1,18 @@
-//! The GPU's flight curve against the Rust one: assets/shaders/voxel_flight.wgsl's `flown` runs in a compute pass
-//! on Mesa's lavapipe (software Vulkan) over thousands of tweens, clocks and looks, and every voxel it returns is
-//! compared with `voxel_art::instancing::flown` (place, box, colour, shown).
+//! The GPU's flight curve and repel spring against the Rust ones: assets/shaders/voxel_flight.wgsl's `flown` and
+//! `sprung` run in a compute pass on Mesa's lavapipe (software Vulkan) over thousands of tweens, springs, clocks
+//! and looks, and every voxel they return is compared with `voxel_art::instancing::flown` (place, box, colour,
+//! shown) and `GpuSpring::sprung` (place).
 
 use bevy::math::Vec3;
-use voxel_art::instancing::{GpuClock, GpuVoxel, TweenShow, VoxelTween, flown};
+use voxel_art::instancing::spring::HELD;
+use voxel_art::instancing::{GpuClock, GpuSpring, GpuVoxel, Spring, TweenShow, VoxelTween, flown};
 use wgpu::util::DeviceExt;
 
 /// Cases run.
 const CASES: usize = 4096;
 
 /// A compute entry point over the shader's own functions: out[i] = flown(looks[i], flights[i], i % 8, clocks[i]).
-const ENTRY: &str = "
+const FLOWN: &str = "
 @group(0) @binding(0) var<storage, read> looks: array<Voxel>;
 @group(0) @binding(1) var<storage, read> flights: array<Flight>;
 @group(0) @binding(2) var<storage, read> clocks: array<Clock>;
@@ -21,6 +23,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
     if i < arrayLength(&out) {
         out[i] = flown(looks[i], flights[i], i % 8u, clocks[i]);
+    }
+}
+";
+
+/// out[i] = sprung(looks[i], springs[i], clocks[i]).
+const SPRUNG: &str = "
+@group(0) @binding(0) var<storage, read> looks: array<Voxel>;
+@group(0) @binding(1) var<storage, read> springs: array<Spring>;
+@group(0) @binding(2) var<storage, read> clocks: array<Clock>;
+@group(0) @binding(3) var<storage, read_write> out: array<Voxel>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i < arrayLength(&out) {
+        out[i] = sprung(looks[i], springs[i], clocks[i]);
     }
 }
 ";
@@ -98,19 +116,21 @@ fn cases() -> (Vec<GpuVoxel>, Vec<VoxelTween>, Vec<GpuClock>) {
     (looks, tweens, clocks)
 }
 
-/// Runs the shader's `flown` over the cases on `device`.
+/// Runs the shader's functions through `entry` over `looks`, `records` (a flight or a spring per look) and
+/// `clocks` on `device`: a voxel per look.
 fn run_on_gpu(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
+    entry: &str,
     looks: &[GpuVoxel],
-    tweens: &[VoxelTween],
+    records: &[u8],
     clocks: &[GpuClock],
 ) -> Vec<GpuVoxel> {
     let source = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/shaders/voxel_flight.wgsl"))
         .expect("the flight shader");
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("flight"),
-        source: wgpu::ShaderSource::Wgsl((source + ENTRY).into()),
+        source: wgpu::ShaderSource::Wgsl((source + entry).into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("flight"),
@@ -127,8 +147,8 @@ fn run_on_gpu(
             usage: wgpu::BufferUsages::STORAGE,
         })
     };
-    let (looks_buffer, tweens_buffer, clocks_buffer) =
-        (input(bytemuck::cast_slice(looks)), input(bytemuck::cast_slice(tweens)), input(bytemuck::cast_slice(clocks)));
+    let (looks_buffer, records_buffer, clocks_buffer) =
+        (input(bytemuck::cast_slice(looks)), input(records), input(bytemuck::cast_slice(clocks)));
     let size = size_of_val(looks) as u64;
     let out = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -142,7 +162,7 @@ fn run_on_gpu(
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let entries: Vec<wgpu::BindGroupEntry> = [&looks_buffer, &tweens_buffer, &clocks_buffer, &out]
+    let entries: Vec<wgpu::BindGroupEntry> = [&looks_buffer, &records_buffer, &clocks_buffer, &out]
         .iter()
         .enumerate()
         .map(|(i, b)| wgpu::BindGroupEntry { binding: i as u32, resource: b.as_entire_binding() })
@@ -171,7 +191,7 @@ fn run_on_gpu(
 fn the_shaders_flight_is_the_rust_curve() {
     let Some((device, queue)) = device() else { return };
     let (looks, tweens, clocks) = cases();
-    let gpu = run_on_gpu(&device, &queue, &looks, &tweens, &clocks);
+    let gpu = run_on_gpu(&device, &queue, FLOWN, &looks, bytemuck::cast_slice(&tweens), &clocks);
     let (mut flying, mut hidden) = (0, 0);
     for i in 0..CASES {
         let cpu = flown(&looks[i], &tweens[i], i % 8, &clocks[i]);
@@ -192,4 +212,39 @@ fn the_shaders_flight_is_the_rust_curve() {
     // The cases cover flights and landed voxels, shown and hidden ones.
     assert!(flying > CASES / 4 && flying < CASES * 3 / 4, "{flying} of {CASES} in flight");
     assert!(hidden > CASES / 20, "{hidden} hidden");
+}
+
+#[test]
+fn the_shaders_spring_is_the_rust_one() {
+    let Some((device, queue)) = device() else { return };
+    let (looks, _, _) = cases();
+    let mut draw = Draw(0x2545_f491_4f6c_dd1d);
+    let (mut springs, mut clocks) = (Vec::new(), Vec::new());
+    for i in 0..CASES {
+        let since = if i % 5 == 0 { HELD } else { draw.f32(0.0, 100.0) };
+        let spring = Spring { offset: draw.vec3(-1.0, 1.0), velocity: draw.vec3(-12.0, 12.0), since };
+        springs.push(GpuSpring::from(spring));
+        // Before the state, during the return and long after it.
+        let time = if since == HELD { draw.f32(0.0, 100.0) } else { since + draw.f32(-0.1, 3.0) };
+        clocks.push(GpuClock::new(time, 0.0, 0.0));
+    }
+    let gpu = run_on_gpu(&device, &queue, SPRUNG, &looks, bytemuck::cast_slice(&springs), &clocks);
+    let mut moved = 0;
+    for i in 0..CASES {
+        let cpu = springs[i].sprung(&looks[i], clocks[i].time);
+        let got = gpu[i];
+        moved += usize::from(cpu.position().distance(looks[i].position()) > 1e-2);
+        assert!(
+            got.position().distance(cpu.position()) < 1e-4,
+            "case {i}: at {} for {}",
+            got.position(),
+            cpu.position()
+        );
+        assert_eq!(
+            (got.color, got.x_axis, got.scale_y, got.scale_z),
+            (cpu.color, cpu.x_axis, cpu.scale_y, cpu.scale_z)
+        );
+    }
+    // The cases cover springs held off, returning and home.
+    assert!(moved > CASES / 4 && moved < CASES * 3 / 4, "{moved} of {CASES} off their looks");
 }

@@ -99,12 +99,14 @@ pub fn flights(app: &App) -> Vec<(usize, voxel_art::instancing::VoxelTween)> {
     tweens.flying(pool).map(|(slot, t)| (slot, *t)).collect()
 }
 
-/// Every pool slot as the GPU draws it this frame (its flight at the frame's clock, else its look).
+/// Every pool slot as the GPU draws it this frame (its flight at the frame's clock, else its look moved by its
+/// repel spring).
 pub fn drawn(app: &App) -> Vec<voxel_art::instancing::GpuVoxel> {
     let world = app.world();
     let tweens = world.resource::<voxel_art::instancing::VoxelTweens>();
     let clock = world.resource::<voxel_art::instancing::GpuClock>();
-    tweens.drawn(world.resource::<voxel_art::instancing::VoxelPool>(), &looks(app), clock)
+    let springs = &world.resource::<voxel_art::instancing::GpuSprings>().items;
+    tweens.drawn(world.resource::<voxel_art::instancing::VoxelPool>(), &looks(app), springs, clock)
 }
 
 /// The model's turn now (the cloud's rotation).

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
-use voxel_art::instancing::{GpuVoxels, VoxelPool};
+use voxel_art::instancing::{GpuSprings, GpuVoxels, VoxelPool};
 use voxel_art::library::LibraryRequest;
 use voxel_art::settings::{RepelSettings, VoxelSettings};
 use voxel_art::style::CursorRay;
@@ -12,7 +12,7 @@ use voxel_art::style::Style;
 use voxel_art::style::bubbles::{BubbleSettings, BubbleState, Bubbles};
 use voxel_art::style::falling::FallingPile;
 
-use crate::harness::{all_settled, looks, run_until, test_app, turn};
+use crate::harness::{all_settled, drawn, looks, run_until, test_app, turn};
 use crate::logic::shown_model;
 use crate::transition::{assert_shows_model, settle};
 
@@ -102,9 +102,16 @@ fn falling_voxels_pile_up_at_rest_and_reassemble() {
     assert_eq!(first, again, "the same seed gives the same pile");
 }
 
-/// Voxels in the chunks uploaded for the last frame (the chunks whose looks changed).
-fn uploaded(app: &App) -> usize {
-    app.world().resource::<GpuVoxels>().dirty_ranges().iter().map(|(start, end)| end - start).sum()
+/// Voxels in the chunks uploaded for the last frame: (looks, springs).
+fn uploaded(app: &App) -> (usize, usize) {
+    let count = |ranges: &[(usize, usize)]| ranges.iter().map(|(start, end)| end - start).sum();
+    let world = app.world();
+    (count(world.resource::<GpuVoxels>().dirty_ranges()), count(world.resource::<GpuSprings>().dirty_ranges()))
+}
+
+/// Where the GPU draws a slot's voxel this frame.
+fn drawn_at(app: &App, slot: usize) -> Vec3 {
+    drawn(app)[slot].position()
 }
 
 #[test]
@@ -118,24 +125,30 @@ fn repel_pushes_voxels_off_the_cursor_ray_and_they_spring_back() {
     let far_slot = (0..app.world().resource::<VoxelPool>().visible)
         .max_by(|a, b| home_world(&mut app, *a).distance(target).total_cmp(&home_world(&mut app, *b).distance(target)))
         .unwrap();
-    let far_before = translation(&mut app, far_slot);
+    let far_before = drawn_at(&app, far_slot);
     app.insert_resource(CursorRay(Some(Ray3d::new(target + Vec3::Z * 20.0, Dir3::NEG_Z))));
     app.update();
-    assert!(uploaded(&app) > 0, "pushed voxels were not uploaded");
+    assert_eq!(uploaded(&app).0, 0, "repel rewrote looks");
+    assert!(uploaded(&app).1 > 0, "pushed voxels' springs were not uploaded");
     for _ in 0..59 {
         app.update();
     }
-    assert_eq!(uploaded(&app), 0, "voxels held by a still cursor still rewritten every frame");
-    let pushed = translation(&mut app, 0).distance(target);
+    assert_eq!(uploaded(&app), (0, 0), "voxels held by a still cursor still rewritten every frame");
+    let pushed = drawn_at(&app, 0).distance(target);
     assert!(pushed >= 0.9 * radius * strength, "pushed {pushed}, expected about {}", radius * strength);
-    assert_eq!(translation(&mut app, far_slot), far_before, "a far voxel moved");
+    assert_eq!(drawn_at(&app, far_slot), far_before, "a far voxel moved");
+    // Let go: the springs are written once, then the GPU brings the voxels home.
     app.insert_resource(CursorRay(None));
+    app.update();
+    assert!(uploaded(&app).1 > 0, "let-go voxels' springs were not uploaded");
+    let on_the_way = drawn_at(&app, 0).distance(target);
+    assert!(on_the_way > 0.5 * pushed, "jumped home: {on_the_way} of {pushed}");
     for _ in 0..120 {
         app.update();
+        assert_eq!(uploaded(&app), (0, 0), "voxels on their way home rewritten");
     }
-    assert_eq!(uploaded(&app), 0, "voxels at rest still rewritten every frame");
     let shown: Vec<(usize, Vec3)> =
-        looks(&app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, v.position())).collect();
+        drawn(&app).iter().enumerate().filter(|(_, v)| v.shows()).map(|(s, v)| (s, v.position())).collect();
     for (slot, at) in shown {
         let home = home_world(&mut app, slot);
         assert!(at.distance(home) < 1e-3, "slot {slot} did not spring back ({})", at.distance(home));
