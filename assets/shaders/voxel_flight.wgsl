@@ -35,7 +35,8 @@ struct Flight {
 }
 
 // One voxel's repel spring (16 bytes, `GpuSpring` in src/instancing/spring.rs): offset and velocity in the
-// model's frame as half floats, at clock time `since`; free (returning home) from then on.
+// model's frame as half floats, at clock time `since`, pulled from then on towards the cursor's push (the sign
+// bit of `since` set) or home.
 struct Spring {
     offset_xy: u32,
     offset_z_velocity_x: u32,
@@ -46,13 +47,18 @@ struct Spring {
 // The spring's stiffness (1/s², `STIFFNESS`); the damping is critical.
 const STIFFNESS: f32 = 140.0;
 
-// The flight clock of the frame (`FlightClock` in src/transition.rs): seconds, the model's angle about y and the
-// visible count.
+// The flight clock of the frame (`GpuClock` in src/instancing/flight.rs): seconds, the model's angle about y and
+// the visible count; and the cursor in the model's frame (its reach around its ray, 0 without a cursor; its
+// strength).
 struct Clock {
     time: f32,
     angle: f32,
     shown: f32,
-    spare: f32,
+    radius: f32,
+    ray_origin: vec3<f32>,
+    strength: f32,
+    ray_direction: vec3<f32>,
+    pad: f32,
 }
 
 // `Flight::show`: the visible count decides, shown throughout, shown until the end.
@@ -89,19 +95,46 @@ fn flown(look: Voxel, f: Flight, slot: u32, clock: Clock) -> Voxel {
     return v;
 }
 
-// `look` moved by its spring at `clock`: (x₀ + (v₀ + ω x₀) τ) e^(−ω τ), τ seconds since the state (none while
-// held: `since` is the largest float), turned with the voxel.
+// A unit vector perpendicular to the unit vector `d` (glam's `any_orthonormal_vector`).
+fn any_orthonormal(d: vec3<f32>) -> vec3<f32> {
+    let sign = select(-1.0, 1.0, d.z >= 0.0);
+    let a = -1.0 / (sign + d.z);
+    let b = d.x * d.y * a;
+    return vec3(b, sign + d.y * d.y * a, -d.y);
+}
+
+// The cursor's push at `p` (the model's frame): away from its ray, falling off linearly to nothing at its radius.
+fn push(p: vec3<f32>, clock: Clock) -> vec3<f32> {
+    let along = max(dot(p - clock.ray_origin, clock.ray_direction), 0.0);
+    let away = p - (clock.ray_origin + clock.ray_direction * along);
+    let d2 = dot(away, away);
+    if !(d2 < clock.radius * clock.radius) {
+        return vec3(0.0);
+    }
+    let d = sqrt(d2);
+    let n = select(any_orthonormal(clock.ray_direction), away / d, d > 1e-5);
+    return n * (clock.radius - d) * clock.strength;
+}
+
+// `look` moved by its spring at `clock`: with y the offset from the target (the cursor's push at the voxel while
+// it is pulled, else home), y(τ) = (y₀ + (v₀ + ω y₀) τ) e^(−ω τ), τ seconds since the state; turned with the
+// voxel.
 fn sprung(look: Voxel, spring: Spring, clock: Clock) -> Voxel {
     let xy = unpack2x16float(spring.offset_xy);
     let zx = unpack2x16float(spring.offset_z_velocity_x);
     let yz = unpack2x16float(spring.velocity_yz);
     let offset = vec3(xy, zx.x);
     let velocity = vec3(zx.y, yz);
-    let w = sqrt(STIFFNESS);
-    let tau = max(clock.time - spring.since, 0.0);
-    let moved = (offset + (velocity + offset * w) * tau) * exp(-w * tau);
     let width = length(look.x_axis);
     let c = select(vec2(1.0, 0.0), look.x_axis / width, width > 0.0);
+    let home = vec3(c.x * look.translation.x + c.y * look.translation.z, look.translation.y,
+        c.x * look.translation.z - c.y * look.translation.x);
+    let pulled = (bitcast<u32>(spring.since) >> 31u) != 0u;
+    let goal = select(vec3(0.0), push(home, clock), pulled);
+    let w = sqrt(STIFFNESS);
+    let tau = max(clock.time - abs(spring.since), 0.0);
+    let y = offset - goal;
+    let moved = goal + (y + (velocity + y * w) * tau) * exp(-w * tau);
     var v = look;
     v.translation = look.translation + vec3(c.x * moved.x - c.y * moved.z, moved.y, c.x * moved.z + c.y * moved.x);
     return v;

@@ -113,7 +113,8 @@ impl Record for VoxelTween {
 }
 
 /// The frame's flight clock as the shaders read it: seconds (scaled by the speed setting), the model's angle
-/// about y and the visible count (slot i of a morph shows while i < `shown`). The transition sets it.
+/// about y and the visible count (slot i of a morph shows while i < `shown`), which the transition sets; and the
+/// cursor in the model's frame, whose push the repel springs pull towards (placing sets it).
 #[repr(C)]
 #[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuClock {
@@ -123,14 +124,48 @@ pub struct GpuClock {
     pub angle: f32,
     /// The visible count.
     pub shown: f32,
-    /// Padding to 16 bytes (zero).
+    /// The cursor's reach around its ray (0: no cursor).
+    pub radius: f32,
+    /// The cursor ray's origin, in the model's frame.
+    pub ray_origin: [f32; 3],
+    /// How far the cursor pushes a voxel on its ray, as a fraction of the radius.
+    pub strength: f32,
+    /// The cursor ray's direction, in the model's frame.
+    pub ray_direction: [f32; 3],
+    /// Padding to 48 bytes (zero).
     pub pad: f32,
 }
 
 impl GpuClock {
-    /// The clock at `time` with the model at `angle` and `shown` slots visible.
+    /// The clock at `time` with the model at `angle` and `shown` slots visible, and no cursor.
     pub fn new(time: f32, angle: f32, shown: f32) -> Self {
-        Self { time, angle, shown, pad: 0.0 }
+        Self { time, angle, shown, ..Self::default() }
+    }
+
+    /// The same clock with the cursor `ray` (in the model's frame; `None`: no cursor) reaching `radius` around
+    /// it and pushing with `strength`.
+    pub fn reaching(self, ray: Option<Ray3d>, radius: f32, strength: f32) -> Self {
+        match ray {
+            Some(ray) => Self {
+                radius,
+                strength,
+                ray_origin: ray.origin.into(),
+                ray_direction: ray.direction.as_vec3().into(),
+                ..self
+            },
+            None => Self { radius: 0.0, strength: 0.0, ray_origin: [0.0; 3], ray_direction: [0.0; 3], ..self },
+        }
+    }
+
+    /// The cursor ray (`None` without a cursor).
+    pub fn ray(&self) -> Option<Ray3d> {
+        let direction = Dir3::new(Vec3::from(self.ray_direction)).ok()?;
+        (self.radius > 0.0).then(|| Ray3d { origin: Vec3::from(self.ray_origin), direction })
+    }
+
+    /// The cursor's push at `position` (the model's frame).
+    pub fn push(&self, position: Vec3) -> Vec3 {
+        super::spring::push(position, self.ray(), self.radius, self.strength)
     }
 }
 
@@ -238,7 +273,7 @@ impl VoxelTweens {
             .into_par_iter()
             .map(|i| match self.flight(pool, i, clock.time) {
                 Some(tween) => flown(&looks[i], tween, i, clock),
-                None => springs.get(i).map_or(looks[i], |s| s.sprung(&looks[i], clock.time)),
+                None => springs.get(i).map_or(looks[i], |s| s.sprung(&looks[i], clock)),
             })
             .collect()
     }
@@ -275,7 +310,7 @@ mod tests {
     #[test]
     fn a_tween_is_96_bytes_and_flies_from_its_start_until_its_end() {
         assert_eq!(size_of::<VoxelTween>(), 96);
-        assert_eq!(size_of::<GpuClock>(), 16);
+        assert_eq!(size_of::<GpuClock>(), 48);
         let tween = VoxelTween {
             from: Vec3::ZERO,
             to: Vec3::X * 2.0,

@@ -1,39 +1,62 @@
-//! Repel springs, drawn by the GPU. A voxel the cursor pushes is drawn off its look by a critically damped
-//! spring; once the cursor lets it go, the spring returns home in closed form, `(x₀ + (v₀ + ω x₀) τ) e^(−ω τ)`,
-//! so the vertex shaders draw it from one record and the frame's clock (assets/shaders/voxel_spring.wgsl) and
-//! the CPU does nothing more for it. Each pool slot has a [`Spring`] (the CPU's state) and its [`GpuSpring`]
-//! (16 bytes: offset and velocity as half floats, the clock time they hold at); the styles write records only for
-//! the voxels the cursor pushes now. A voxel held at its target by a still cursor has `since` = [`HELD`]: drawn
-//! there, unmoving, until the cursor lets it go.
+//! Repel springs, drawn by the GPU. A voxel the cursor reaches is pushed away from the cursor ray by a critically
+//! damped spring, and springs back home when the cursor lets it go. Each pool slot has a [`Spring`] (the CPU's
+//! state) and its [`GpuSpring`] (16 bytes: offset and velocity as half floats, the clock time they hold at, and
+//! whether the cursor pulls it). The vertex shaders draw it in closed form from the record and the frame's clock,
+//! which carries the cursor ray (assets/shaders/voxel_flight.wgsl): with `y` the offset from the target `T` (the
+//! push at the voxel now, or home once let go), `y(τ) = (y₀ + (v₀ + ω y₀) τ) e^(−ω τ)`. So the CPU writes a
+//! record only when the cursor catches a voxel or lets it go: a cursor moving through a million voxels costs the
+//! records of the voxels at the edge of its reach, a still cursor nothing.
 
 use bevy::prelude::*;
 use bevy::render::storage::ShaderBuffer;
 use bytemuck::{Pod, Zeroable};
 use half::f16;
 
+use super::flight::GpuClock;
 use super::gpu::{GpuVoxel, Mirror, Mirrored, Record};
 use super::{Slot, VoxelMaterial};
 
 /// Spring stiffness (1/s²); the damping is critical.
 pub const STIFFNESS: f32 = 140.0;
 
-/// `since` of a spring held where it is (by a still cursor): its clock never runs.
-pub const HELD: f32 = f32::MAX;
-
 /// Seconds after which any free spring is home, within a micrometre: its offset was at most 10 and its speed
 /// 100 (`(10 + 218 τ) e^(−ω τ)` < 10⁻⁶ at τ = 2).
 pub const SETTLED_AFTER: f32 = 2.0;
 
+/// The vector from the closest point of the half-line `ray` to `p` (its length is `p`'s distance to the ray).
+pub fn away_from_ray(p: Vec3, ray: Ray3d) -> Vec3 {
+    let along = (p - ray.origin).dot(*ray.direction).max(0.0);
+    p - (ray.origin + *ray.direction * along)
+}
+
+/// The displacement the cursor `ray` gives a voxel at `p`: away from the ray, falling off linearly to nothing at
+/// `radius`; a voxel on the ray is pushed `radius × strength` sideways.
+pub fn push(p: Vec3, ray: Option<Ray3d>, radius: f32, strength: f32) -> Vec3 {
+    let Some(ray) = ray else { return Vec3::ZERO };
+    let away = away_from_ray(p, ray);
+    let d2 = away.length_squared();
+    if d2 >= radius * radius {
+        return Vec3::ZERO;
+    }
+    let d = d2.sqrt();
+    // On the ray itself, push sideways (perpendicular to the ray, in a fixed direction).
+    let n = if d > 1e-5 { away / d } else { ray.direction.any_orthonormal_vector() };
+    n * (radius - d) * strength
+}
+
 /// A voxel's repel spring (in the cloud's frame, like its home): its offset and velocity at clock time `since`,
-/// free from then on (returning home) unless `since` is [`HELD`]. The default is at rest, home.
+/// pulled from then on towards the push of the cursor at the voxel (`pulled`), or home. The default is at rest,
+/// home.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Spring {
     /// Displacement at `since`.
     pub offset: Vec3,
     /// Velocity at `since`.
     pub velocity: Vec3,
-    /// The flight clock's time the state holds at ([`HELD`]: always).
+    /// The flight clock's time the state holds at.
     pub since: f32,
+    /// The cursor pulls it (towards its push); else it returns home.
+    pub pulled: bool,
 }
 
 /// The natural frequency ω of the critically damped spring.
@@ -43,85 +66,50 @@ fn omega() -> f32 {
 
 /// The critically damped spring's state `tau` seconds after (`offset`, `velocity`), pulled to the origin.
 fn decayed(offset: Vec3, velocity: Vec3, tau: f32) -> (Vec3, Vec3) {
-    faded(offset, velocity, tau, (-omega() * tau).exp())
-}
-
-/// [`decayed`] with its fade `e^(−ω tau)` given.
-#[inline]
-fn faded(offset: Vec3, velocity: Vec3, tau: f32, fade: f32) -> (Vec3, Vec3) {
     let w = omega();
     let b = velocity + offset * w;
+    let fade = (-w * tau).exp();
     ((offset + b * tau) * fade, (velocity - b * (w * tau)) * fade)
 }
 
-/// One frame of pulling: its length and the spring's fade over it, worked out once for every spring.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Step {
-    /// Seconds.
-    pub dt: f32,
-    /// `e^(−ω dt)`.
-    fade: f32,
-}
-
-impl Step {
-    /// A frame of `dt` seconds.
-    pub fn new(dt: f32) -> Self {
-        let dt = dt.max(0.0);
-        Self { dt, fade: (-omega() * dt).exp() }
-    }
-}
-
 impl Spring {
-    /// Offset and velocity at clock time `time` (free since `since`, or held).
-    #[inline]
-    pub fn at(&self, time: f32) -> (Vec3, Vec3) {
-        let tau = time - self.since;
-        if tau <= 0.0 {
-            return (self.offset, self.velocity);
-        }
-        decayed(self.offset, self.velocity, tau)
-    }
-
-    /// Whether it is held where it is.
-    pub fn held(&self) -> bool {
-        self.since == HELD
+    /// Offset and velocity at clock time `time`, `target` being the cursor's push at the voxel now (used only
+    /// while it is pulled).
+    pub fn at(&self, time: f32, target: Vec3) -> (Vec3, Vec3) {
+        let target = if self.pulled { target } else { Vec3::ZERO };
+        let (offset, velocity) = decayed(self.offset - target, self.velocity, (time - self.since).max(0.0));
+        (offset + target, velocity)
     }
 
     /// Whether it is home and still at clock time `time` (exactly, or within a millimetre and a centimetre per
     /// second).
     pub fn rests(&self, time: f32) -> bool {
+        if self.pulled {
+            return false;
+        }
         if *self == Spring::default() || time - self.since >= SETTLED_AFTER {
             return true;
         }
-        let (offset, velocity) = self.at(time);
-        !self.held() && offset.length_squared() < 1e-6 && velocity.length_squared() < 1e-4
+        let (offset, velocity) = self.at(time, Vec3::ZERO);
+        offset.length_squared() < 1e-6 && velocity.length_squared() < 1e-4
     }
 
-    /// The spring at clock time `time`, pulled towards `target` for the last `step` (free before it); held at
-    /// the target once within a millimetre and a centimetre per second of it (at rest when the target is home),
-    /// so a voxel held by a still cursor, or back home, is not written again.
-    #[inline]
-    pub fn pulled(&self, target: Vec3, time: f32, step: Step) -> Spring {
-        let (offset, velocity) = self.at(time - step.dt);
-        let (toward, velocity) = faded(offset - target, velocity, step.dt, step.fade);
-        if toward.length_squared() < 1e-6 && velocity.length_squared() < 1e-4 {
-            return if target == Vec3::ZERO {
-                Spring::default()
-            } else {
-                Spring { offset: target, velocity: Vec3::ZERO, since: HELD }
-            };
-        }
-        Spring { offset: toward + target, velocity, since: time }
+    /// The spring the cursor catches at clock time `time`: from where it is, pulled from now on.
+    pub fn caught(&self, time: f32) -> Spring {
+        let (offset, velocity) = self.at(time, Vec3::ZERO);
+        Spring { offset, velocity, since: time, pulled: true }
     }
 
-    /// The same spring let go at clock time `time`: free from where it is.
-    pub fn released(&self, time: f32) -> Spring {
-        let (offset, velocity) = self.at(time);
-        Spring { offset, velocity, since: time }
+    /// The spring the cursor lets go at clock time `time`, `target` being the push it was drawn with last: from
+    /// where it is, home.
+    pub fn let_go(&self, time: f32, target: Vec3) -> Spring {
+        let (offset, velocity) = self.at(time, target);
+        Spring { offset, velocity, since: time, pulled: false }
     }
 }
 
-/// One slot's spring as the vertex shaders read it (16 bytes): offset and velocity as half floats, and `since`.
+/// One slot's spring as the vertex shaders read it (16 bytes): offset and velocity as half floats, and `since`
+/// with its sign bit set while the cursor pulls it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSpring {
@@ -131,7 +119,7 @@ pub struct GpuSpring {
     offset_z_velocity_x: u32,
     /// Velocity y | z << 16.
     velocity_yz: u32,
-    /// The clock time the state holds at.
+    /// The clock time the state holds at; its sign bit: pulled.
     since: f32,
 }
 
@@ -145,13 +133,17 @@ fn unpack(word: u32) -> (f32, f32) {
     (f16::from_bits(word as u16).to_f32(), f16::from_bits((word >> 16) as u16).to_f32())
 }
 
+/// The sign bit of a float.
+const SIGN: u32 = 1 << 31;
+
 impl From<Spring> for GpuSpring {
     fn from(s: Spring) -> Self {
+        let since = s.since.abs().to_bits() | if s.pulled { SIGN } else { 0 };
         Self {
             offset_xy: pack(s.offset.x, s.offset.y),
             offset_z_velocity_x: pack(s.offset.z, s.velocity.x),
             velocity_yz: pack(s.velocity.y, s.velocity.z),
-            since: s.since,
+            since: f32::from_bits(since),
         }
     }
 }
@@ -161,16 +153,23 @@ impl GpuSpring {
     pub fn spring(&self) -> Spring {
         let ((ox, oy), (oz, vx), (vy, vz)) =
             (unpack(self.offset_xy), unpack(self.offset_z_velocity_x), unpack(self.velocity_yz));
-        Spring { offset: Vec3::new(ox, oy, oz), velocity: Vec3::new(vx, vy, vz), since: self.since }
+        Spring {
+            offset: Vec3::new(ox, oy, oz),
+            velocity: Vec3::new(vx, vy, vz),
+            since: self.since.abs(),
+            pulled: self.since.to_bits() & SIGN != 0,
+        }
     }
 
-    /// `look` moved by the spring at clock time `time` (the offset turned with the voxel): the shaders' `sprung`.
-    pub fn sprung(&self, look: &GpuVoxel, time: f32) -> GpuVoxel {
-        let (offset, _) = self.spring().at(time);
+    /// `look` moved by the spring at `clock` (pushed by the clock's cursor at the look's place, the offset turned
+    /// with the voxel): the shaders' `sprung`.
+    pub fn sprung(&self, look: &GpuVoxel, clock: &GpuClock) -> GpuVoxel {
         let width = Vec2::from(look.x_axis).length();
         let (c, s) = if width > 0.0 { (look.x_axis[0] / width, -look.x_axis[1] / width) } else { (1.0, 0.0) };
-        let turned = Vec3::new(c * offset.x + s * offset.z, offset.y, c * offset.z - s * offset.x);
-        GpuVoxel { translation: (look.position() + turned).into(), ..*look }
+        let turn = |v: Vec3, s: f32| Vec3::new(c * v.x + s * v.z, v.y, c * v.z - s * v.x);
+        let home = turn(look.position(), -s);
+        let (offset, _) = self.spring().at(clock.time, clock.push(home));
+        GpuVoxel { translation: (look.position() + turn(offset, s)).into(), ..*look }
     }
 }
 
@@ -208,6 +207,11 @@ impl GpuSprings {
             self.set(index, GpuSpring::default());
         }
     }
+
+    /// Slot `slot`'s look `look` as the GPU draws it at `clock` (moved by its spring).
+    pub fn drawn(&self, slot: usize, look: &GpuVoxel, clock: &GpuClock) -> GpuVoxel {
+        self.items.get(slot).map_or(*look, |s| s.sprung(look, clock))
+    }
 }
 
 #[cfg(test)]
@@ -216,68 +220,88 @@ mod tests {
     use crate::instancing::Turn;
 
     #[test]
-    fn a_pulled_spring_reaches_its_target_without_overshoot_is_held_and_returns_home_freely() {
+    fn the_push_is_away_from_the_ray_and_vanishes_outside_the_radius() {
+        let ray = Some(Ray3d::new(Vec3::new(0.0, 0.0, 10.0), Dir3::NEG_Z));
+        let on = push(Vec3::ZERO, ray, 1.0, 0.8);
+        assert!((on.length() - 0.8).abs() < 1e-5);
+        let near = push(Vec3::new(0.5, 0.0, 0.0), ray, 1.0, 0.8);
+        assert!((near - Vec3::new(0.4, 0.0, 0.0)).length() < 1e-5);
+        assert_eq!(push(Vec3::new(2.0, 0.0, 0.0), ray, 1.0, 0.8), Vec3::ZERO);
+        assert_eq!(push(Vec3::ZERO, None, 1.0, 0.8), Vec3::ZERO);
+    }
+
+    #[test]
+    fn a_caught_spring_eases_onto_the_push_without_overshoot_and_a_let_go_one_returns_home() {
         let target = Vec3::new(0.3, 0.0, -0.4);
-        let (mut spring, mut time, dt) = (Spring::default(), 0.0, 1.0 / 60.0);
-        let step = Step::new(dt);
-        let mut farthest = 0.0f32;
-        for _ in 0..60 {
-            time += dt;
-            spring = spring.pulled(target, time, step);
-            farthest = farthest.max(spring.offset.length());
-        }
-        assert!(spring.offset.distance(target) < 0.01, "after 1 s: {:?}", spring.offset);
+        let spring = Spring::default().caught(1.0);
+        assert_eq!(spring.at(1.0, target).0, Vec3::ZERO, "it starts where it was");
+        let farthest = (1..=60).map(|f| spring.at(1.0 + f as f32 / 60.0, target).0.length()).fold(0.0, f32::max);
+        assert!(spring.at(2.0, target).0.distance(target) < 0.01, "after 1 s: {:?}", spring.at(2.0, target));
         assert!(farthest <= target.length() * 1.001, "overshot to {farthest}");
-        // Held: the same pull again leaves it as it is, and time does not move it.
-        while !spring.held() {
-            time += dt;
-            spring = spring.pulled(target, time, step);
-        }
-        assert_eq!(spring.pulled(target, time + dt, step), spring);
-        assert_eq!(spring.at(time + 5.0).0, target);
-        assert!(!spring.rests(time + 5.0));
-        // Let go: free, it is home within 0.8 s and stays there.
-        let free = spring.released(time);
-        assert_eq!(free.at(time).0, target);
-        let back = free.at(time + 0.8).0;
+        assert!(!spring.rests(10.0));
+        // Let go where it is drawn: it starts there and is home within 0.8 s.
+        let free = spring.let_go(2.0, target);
+        assert!(!free.pulled && free.at(2.0, target).0.distance(spring.at(2.0, target).0) < 1e-6);
+        let back = free.at(2.8, target).0;
         assert!(back.length() < 1e-3 && back.length() > 0.0, "{back}");
-        assert!(!free.rests(time + 0.5) && free.rests(time + 0.9));
-        assert!(free.at(time + SETTLED_AFTER).0.length() < 1e-6);
-        assert!(free.at(time + 0.05).0.length() < target.length(), "it returns, no overshoot");
+        assert!(!free.rests(2.5) && free.rests(2.9));
+        assert!(free.at(2.0 + SETTLED_AFTER, target).0.length() < 1e-6);
+        assert!(free.at(2.05, target).0.length() < target.length(), "it returns, no overshoot");
+        // Caught again on its way: it goes on from where it is.
+        let again = free.caught(2.1);
+        assert_eq!(again.at(2.1, target), free.at(2.1, target));
     }
 
     #[test]
     fn free_decay_solves_the_spring_equation() {
         // x'' = −K x − 2ω x', checked by finite differences along the closed form.
-        let spring = Spring { offset: Vec3::new(0.5, -0.2, 0.1), velocity: Vec3::new(-3.0, 1.0, 4.0), since: 1.0 };
+        let spring = Spring {
+            offset: Vec3::new(0.5, -0.2, 0.1),
+            velocity: Vec3::new(-3.0, 1.0, 4.0),
+            since: 1.0,
+            pulled: false,
+        };
         let h = 1e-3;
         for tau in [0.01f32, 0.1, 0.3] {
             let t = 1.0 + tau;
-            let (x, v) = spring.at(t);
-            let (before, after) = (spring.at(t - h).0, spring.at(t + h).0);
+            let (x, v) = spring.at(t, Vec3::ZERO);
+            let (before, after) = (spring.at(t - h, Vec3::ZERO).0, spring.at(t + h, Vec3::ZERO).0);
             let speed = (after - before) / (2.0 * h);
             let accel = (after - 2.0 * x + before) / (h * h);
             assert!(speed.distance(v) < 1e-2, "τ {tau}: v {v} for {speed}");
             let expected = -x * STIFFNESS - v * 2.0 * omega();
             assert!(accel.distance(expected) < 0.05 * expected.length().max(1.0), "τ {tau}: a {accel} for {expected}");
         }
-        assert_eq!(spring.at(0.5), (spring.offset, spring.velocity), "before `since` it holds");
+        assert_eq!(spring.at(0.5, Vec3::ZERO), (spring.offset, spring.velocity), "before `since` it holds");
     }
 
     #[test]
     fn a_record_keeps_the_spring_in_half_floats_and_moves_the_turned_look() {
         assert_eq!(size_of::<GpuSpring>(), 16);
-        let spring = Spring { offset: Vec3::new(0.25, -0.5, 1.0), velocity: Vec3::new(3.0, -2.0, 0.125), since: 7.5 };
+        let spring = Spring {
+            offset: Vec3::new(0.25, -0.5, 1.0),
+            velocity: Vec3::new(3.0, -2.0, 0.125),
+            since: 7.5,
+            pulled: true,
+        };
         assert_eq!(GpuSpring::from(spring).spring(), spring, "exact in half floats");
+        let free = Spring { pulled: false, since: 0.0, ..spring };
+        assert_eq!(GpuSpring::from(free).spring(), free);
         let rough = Spring { offset: Vec3::splat(0.123_456), ..spring };
         assert!(GpuSpring::from(rough).spring().offset.distance(rough.offset) < 1e-4);
-        // The offset is in the cloud's frame: the look is turned a quarter about y.
+        // The look is turned a quarter about y; the offset and the cursor are in the cloud's frame.
         let turn = Turn::new(Quat::from_rotation_y(std::f32::consts::FRAC_PI_2));
-        let look = turn.place(Vec3::new(1.0, 2.0, 3.0), Vec3::splat(0.2), 7);
-        let held = GpuSpring::from(Spring { since: HELD, ..spring });
-        let moved = held.sprung(&look, 100.0);
-        assert!(moved.position().distance(look.position() + turn.rotation * spring.offset) < 1e-5);
+        let home = Vec3::new(1.0, 2.0, 3.0);
+        let look = turn.place(home, Vec3::splat(0.2), 7);
+        let ray = Ray3d::new(home + Vec3::new(0.5, 0.0, 10.0), Dir3::NEG_Z);
+        let clock = GpuClock::new(100.0, 0.0, 0.0).reaching(Some(ray), 1.0, 0.8);
+        let expected = push(home, Some(ray), 1.0, 0.8);
+        assert!((expected - Vec3::new(-0.4, 0.0, 0.0)).length() < 1e-5);
+        // Pulled long enough: at the push; let go long enough: home.
+        let moved = GpuSpring::from(spring).sprung(&look, &clock);
+        assert!(moved.position().distance(look.position() + turn.rotation * expected) < 1e-4, "{moved:?}");
         assert_eq!((moved.color, moved.x_axis, moved.scale_y), (look.color, look.x_axis, look.scale_y));
-        assert_eq!(GpuSpring::default().sprung(&look, 3.0), look);
+        assert!(GpuSpring::from(free).sprung(&look, &clock).position().distance(look.position()) < 1e-5);
+        assert_eq!(GpuSpring::default().sprung(&look, &clock), look);
     }
 }

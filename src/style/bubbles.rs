@@ -14,7 +14,7 @@ use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
 
-use super::repel::away_from_ray;
+use crate::instancing::spring::away_from_ray;
 
 /// Timings of a burst.
 #[derive(Resource, Clone, Debug, PartialEq, Reflect)]

@@ -165,7 +165,7 @@ fn control(
     let turn = Turn::new(active.turn());
     let shown: Vec<(u32, Vec3)> = (0..pool.slots.len())
         .filter(|&i| !pool.slots[i].flying && looks.items[i].shows())
-        .map(|i| (i as u32, looks.items[i].position() + turn.rotation * pool.slots[i].repel.at(clock.time).0))
+        .map(|i| (i as u32, springs.drawn(i, &looks.items[i], &clock).position()))
         .collect();
     if shown.is_empty() {
         return;

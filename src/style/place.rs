@@ -1,10 +1,10 @@
-//! Placing the voxels at home each frame: home cell + bubble wobble, turned with the model, and the repel springs
-//! of the voxels the cursor reaches.
+//! Placing the voxels at home each frame: home cell + bubble wobble, turned with the model; and the cursor for
+//! the repel springs, which the GPU draws (`instancing::spring`).
 //!
-//! The pool's slots, looks and springs are walked a chunk to a task (rayon over the cores); a chunk the cursor
-//! cannot reach and that holds no voxel is passed over whole, and every voxel of a reached chunk the cursor leaves
-//! alone costs one distance test and writes nothing. A voxel the cursor lets go is brought home by the GPU
-//! (`instancing::spring`): its looks never change for repel, and its spring is written while it is pushed.
+//! The pool's slots, looks and springs are walked a chunk to a task (rayon over the cores), in groups of
+//! [`GROUP`] slots with a ball around their homes: a group the cursor cannot reach and that has no voxel it
+//! pulls is passed over whole. In the others, each voxel costs one distance test, and a record is written only
+//! for a voxel the cursor catches (it comes within reach) or lets go.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -12,15 +12,22 @@ use bevy::prelude::*;
 use rayon::prelude::*;
 
 use super::Style;
+use crate::instancing::spring::away_from_ray;
 use crate::instancing::{
-    GpuClock, GpuSpring, GpuSprings, GpuVoxel, GpuVoxels, Piece, Slot, Turn, VOXELS_PER_CHUNK, VoxelPool, spring::Step,
+    GpuClock, GpuSpring, GpuSprings, GpuVoxel, GpuVoxels, Piece, Slot, Turn, VOXELS_PER_CHUNK, VoxelPool,
 };
 use crate::settings::{RepelSettings, VoxelSettings};
 use crate::style::CursorRay;
 use crate::transition::ActiveTransition;
 
 use super::bubbles::{Bubble, BubbleSettings, Bubbles};
-use super::repel::{RepelActive, away_from_ray, repel_target};
+use super::repel::RepelActive;
+
+/// Slots in a group with its own ball (64: a 4 × 4 × 4 block of cells in a Morton-ordered layout).
+pub const GROUP: usize = 64;
+
+/// Groups in a chunk.
+const GROUPS_PER_CHUNK: usize = VOXELS_PER_CHUNK / GROUP;
 
 /// Everything placing needs besides the voxels: the model's turn, the cursor and the clock.
 #[derive(Clone, Debug)]
@@ -31,12 +38,10 @@ pub struct Placement {
     pub ray: Option<Ray3d>,
     /// Repel radius (world units).
     pub radius: f32,
-    /// Repel strength (push on the ray = radius × strength).
-    pub strength: f32,
+    /// The clock drawn last frame (its cursor's push is where a voxel let go now was drawn towards).
+    pub last: GpuClock,
     /// The flight clock's time now (the springs' clock).
     pub now: f32,
-    /// The frame on that clock (the springs' pull).
-    pub step: Step,
     /// Animation time for the bubble wobble (seconds, scaled by the speed setting).
     pub time: f32,
     /// Slots below this belong to the model shown; the rest are spares.
@@ -45,66 +50,71 @@ pub struct Placement {
     pub bubbles: BubbleSettings,
 }
 
-/// What placing keeps per chunk of slots: the ball around its homes and whether it holds a voxel off its cell,
-/// so a chunk the cursor cannot reach and that holds none is passed over whole.
+/// What placing keeps per group of slots: the ball around its homes and whether the cursor pulls a voxel of it,
+/// so a group the cursor cannot reach and that it pulls none of is passed over whole.
 #[derive(Debug, Default)]
-pub struct Chunks {
+pub struct Groups {
     /// The pool's home count the balls were made for.
     homes: Option<u64>,
-    /// Centre and radius of the ball around each chunk's homes (the cloud's frame).
+    /// Centre and radius of the ball around each group's homes (the cloud's frame), whole chunks of groups.
     balls: Vec<(Vec3, f32)>,
-    /// The cursor held a voxel of the chunk last frame.
-    holding: Vec<bool>,
+    /// The cursor pulled a voxel of the group last frame.
+    pulling: Vec<bool>,
 }
 
-impl Chunks {
+impl Groups {
     /// Makes the balls anew when the homes changed (`homes`: the pool's count of new homes).
     pub fn refresh(&mut self, slots: &[Slot], homes: u64) {
-        let count = slots.len().div_ceil(VOXELS_PER_CHUNK);
+        let count = slots.len().div_ceil(VOXELS_PER_CHUNK) * GROUPS_PER_CHUNK;
         if self.homes == Some(homes) && self.balls.len() == count {
             return;
         }
         self.balls = slots
-            .par_chunks(VOXELS_PER_CHUNK)
-            .map(|chunk| {
-                let (lo, hi) = chunk
+            .par_chunks(GROUP)
+            .map(|group| {
+                let (lo, hi) = group
                     .iter()
                     .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), s| (lo.min(s.home.position), hi.max(s.home.position)));
                 ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
             })
             .collect();
-        // Every chunk is looked at once more: it may hold a voxel anywhere.
-        self.holding = vec![true; count];
+        // Past the last slot: groups with no slot, never reached.
+        self.balls.resize(count, (Vec3::ZERO, f32::NEG_INFINITY));
+        // Every group is looked at once more: the cursor may pull a voxel of it.
+        self.pulling = vec![true; count];
         self.homes = Some(homes);
     }
 }
 
 impl Placement {
     /// Places every voxel at home of `slots` that moves into `looks` and `springs` (all of them with `bubbles`,
-    /// by slot; otherwise the springs of those the cursor reaches or held), over all cores, passing over the
-    /// chunks `chunks` says are out of reach and hold none. Returns whether the cursor holds a voxel.
+    /// by slot; otherwise the springs of those the cursor catches or lets go), over all cores, passing over the
+    /// groups `groups` says are out of reach and not pulled. Returns whether the cursor pulls a voxel.
     pub fn place(
         &self,
         slots: &mut [Slot],
         bubbles: Option<&[Bubble]>,
         looks: &mut GpuVoxels,
         springs: &mut GpuSprings,
-        chunks: &mut Chunks,
+        groups: &mut Groups,
     ) -> bool {
-        let holding = AtomicBool::new(false);
+        let pulling = AtomicBool::new(false);
         let pieces = slots.par_chunks_mut(VOXELS_PER_CHUNK).zip(looks.pieces().zip(springs.pieces()));
-        pieces.zip(chunks.balls.par_iter().zip(chunks.holding.par_iter_mut())).for_each(
-            |((slots, (mut looks, mut springs)), (ball, holds))| {
-                if bubbles.is_none() && !*holds && !self.reaches(*ball) {
-                    return;
+        let chunks = groups.balls.par_chunks(GROUPS_PER_CHUNK).zip(groups.pulling.par_chunks_mut(GROUPS_PER_CHUNK));
+        pieces.zip(chunks).for_each(|((slots, (mut looks, mut springs)), (balls, pulls))| {
+            for (g, (ball, pulls)) in balls.iter().zip(pulls).enumerate() {
+                let range = (g * GROUP).min(slots.len())..((g + 1) * GROUP).min(slots.len());
+                if range.is_empty() || bubbles.is_none() && !*pulls && !self.reaches(*ball) {
+                    continue;
                 }
-                *holds = self.place_piece(slots, bubbles, &mut looks, &mut springs);
-                if *holds {
-                    holding.store(true, Ordering::Relaxed);
+                let first = range.start;
+                *pulls = self.place_group(&mut slots[range], first, bubbles, &mut looks, &mut springs);
+                if *pulls {
+                    pulling.store(true, Ordering::Relaxed);
                 }
-            },
-        );
-        holding.into_inner()
+            }
+        });
+        pulling.into_inner()
     }
 
     /// Whether the cursor can push a voxel whose home lies in `ball` (centre, radius).
@@ -112,35 +122,40 @@ impl Placement {
         self.ray.is_some_and(|ray| away_from_ray(centre, ray).length() < self.radius + radius)
     }
 
-    /// Places one chunk; returns whether the cursor holds one of its voxels.
-    fn place_piece(
+    /// Whether the cursor reaches a voxel at home `position`.
+    #[inline]
+    fn reaches_home(&self, position: Vec3) -> bool {
+        self.ray.is_some_and(|ray| away_from_ray(position, ray).length_squared() < self.radius * self.radius)
+    }
+
+    /// Places the group of `slots` starting at record `first` of the chunk's pieces; returns whether the cursor
+    /// pulls one of its voxels.
+    fn place_group(
         &self,
         slots: &mut [Slot],
+        first: usize,
         bubbles: Option<&[Bubble]>,
         looks: &mut Piece<GpuVoxel>,
         springs: &mut Piece<GpuSpring>,
     ) -> bool {
         let turn = Turn::new(self.rotation);
-        let mut holds = false;
-        for (i, slot) in slots.iter_mut().enumerate() {
+        let mut pulls = false;
+        for (k, slot) in slots.iter_mut().enumerate() {
+            let i = first + k;
             if looks.start + i >= self.in_model || !slot.at_home() {
                 continue;
             }
-            let target = repel_target(slot.home.position, self.ray, self.radius, self.strength);
             let spring = &mut slot.repel;
-            if target != Vec3::ZERO || spring.held() {
-                let next = if target == Vec3::ZERO {
-                    spring.released(self.now)
+            let reached = self.reaches_home(slot.home.position);
+            if reached != spring.pulled {
+                *spring = if reached {
+                    spring.caught(self.now)
                 } else {
-                    spring.pulled(target, self.now, self.step)
+                    spring.let_go(self.now, self.last.push(slot.home.position))
                 };
-                // Held at its target by a still cursor: nothing changes, nothing to write.
-                if next != *spring {
-                    *spring = next;
-                    springs.set(i, GpuSpring::from(next));
-                }
-                holds |= spring.held();
+                springs.set(i, GpuSpring::from(*spring));
             }
+            pulls |= reached;
             let Some(bubble) = bubbles.and_then(|b| b.get(looks.start + i)) else { continue };
             let home = &slot.home;
             let (grow, shown) = bubble.scale(&self.bubbles);
@@ -148,12 +163,13 @@ impl Placement {
             let look = turn.place(home.position + wobble, home.scale * grow, looks.items[i].color);
             looks.set(i, if shown { look } else { look.hidden() });
         }
-        holds
+        pulls
     }
 }
 
 /// Places the voxels at home: home cell + bubble wobble, turned with the model; bubble scale and visibility; the
-/// repel springs of the voxels the cursor reaches, and of those it lets go. Nothing runs while nothing moves.
+/// cursor (in the clock the GPU reads) and the springs of the voxels it catches and lets go. Nothing runs while
+/// nothing moves.
 pub(super) fn place_at_home(
     time: Res<Time>,
     settings: Res<VoxelSettings>,
@@ -162,35 +178,39 @@ pub(super) fn place_at_home(
     timing: Res<BubbleSettings>,
     cursor: Res<CursorRay>,
     active: Res<ActiveTransition>,
-    clock: Res<GpuClock>,
+    mut clock: ResMut<GpuClock>,
     mut pool: ResMut<VoxelPool>,
     bubbles: Option<Res<Bubbles>>,
     mut looks: ResMut<GpuVoxels>,
     mut springs: ResMut<GpuSprings>,
-    mut holding: ResMut<RepelActive>,
-    mut chunks: Local<Chunks>,
+    mut pulling: ResMut<RepelActive>,
+    mut groups: Local<Groups>,
 ) {
-    let ray = cursor.0.filter(|_| repel.enabled);
+    let rotation = active.turn();
+    // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
+    let ray = cursor
+        .0
+        .filter(|_| repel.enabled)
+        .map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction });
+    let last = *clock;
+    clock.set_if_neq(clock.reaching(ray, repel.radius, repel.strength));
     let bubbles = bubbles.as_ref().map(|b| &b.0[..]).filter(|_| *style.get() == Style::Bubbles);
-    if bubbles.is_none() && ray.is_none() && !holding.0 {
+    if bubbles.is_none() && ray.is_none() && !pulling.0 {
         return;
     }
-    let rotation = active.turn();
     let placement = Placement {
         rotation,
-        // The cursor ray in the cloud's frame: homes and offsets live there, so idle voxels need no turning.
-        ray: ray.map(|r| Ray3d { origin: rotation.inverse() * r.origin, direction: rotation.inverse() * r.direction }),
+        ray,
         radius: repel.radius,
-        strength: repel.strength,
+        last,
         now: clock.time,
-        step: Step::new(time.delta_secs() * settings.speed),
         time: time.elapsed_secs() * settings.speed,
         in_model: pool.visible,
         bubbles: timing.clone(),
     };
     springs.reserve(pool.slots.len());
-    chunks.refresh(&pool.slots, pool.homes);
-    holding.0 = placement.place(&mut pool.slots, bubbles, &mut looks, &mut springs, &mut chunks);
+    groups.refresh(&pool.slots, pool.homes);
+    pulling.0 = placement.place(&mut pool.slots, bubbles, &mut looks, &mut springs, &mut groups);
 }
 
 #[cfg(test)]
@@ -206,12 +226,20 @@ mod tests {
         bubbles: Option<Vec<Bubble>>,
         looks: GpuVoxels,
         springs: GpuSprings,
-        chunks: Chunks,
-        now: f32,
+        groups: Groups,
+        clock: GpuClock,
+        /// The spring records as of the last [`Voxels::written`].
+        seen: Vec<GpuSpring>,
     }
 
     /// The colour every voxel has.
     const COLOR: u32 = 0xdead_beef;
+
+    /// Frames of 1/60 s.
+    const DT: f32 = 1.0 / 60.0;
+
+    /// The cursor's strength.
+    const STRENGTH: f32 = 0.8;
 
     impl Voxels {
         /// The row, laid out in a cloud turned as [`placement`]'s.
@@ -229,40 +257,49 @@ mod tests {
                 slots: (0..n).map(|i| Slot { home: home(i), ..Slot::default() }).collect(),
                 bubbles: bubbles.map(|state| vec![Bubble { phase: 0.0, state }; n]),
                 looks,
+                seen: springs.items.clone(),
                 springs,
-                chunks: Chunks::default(),
-                now: 0.0,
+                groups: Groups::default(),
+                clock: GpuClock::default(),
             }
         }
 
-        /// One frame of `p` (the clock moves on by its step).
+        /// One frame of `p`, as `place_at_home` runs it: the clock moves on and takes the cursor.
         fn place(&mut self, p: &Placement) -> bool {
-            self.now += p.step.dt;
-            let p = Placement { now: self.now, ..p.clone() };
-            self.chunks.refresh(&self.slots, 0);
-            p.place(&mut self.slots, self.bubbles.as_deref(), &mut self.looks, &mut self.springs, &mut self.chunks)
+            let last = self.clock;
+            self.clock = GpuClock::new(last.time + DT, 0.0, 0.0).reaching(p.ray, p.radius, STRENGTH);
+            let p = Placement { now: self.clock.time, last, ..p.clone() };
+            self.groups.refresh(&self.slots, 0);
+            p.place(&mut self.slots, self.bubbles.as_deref(), &mut self.looks, &mut self.springs, &mut self.groups)
         }
 
-        /// Whether voxel `i`'s spring was written.
-        fn written(&self, i: usize) -> bool {
-            self.springs.items[i] != GpuSpring::default()
+        /// Slots whose spring records changed since the last call.
+        fn written(&mut self) -> Vec<usize> {
+            let now = &self.springs.items;
+            let changed = (0..now.len()).filter(|&i| self.seen.get(i).is_none_or(|s| *s != now[i])).collect();
+            self.seen = now.clone();
+            changed
         }
 
         /// Where the GPU draws voxel `i` now.
         fn drawn(&self, i: usize) -> Vec3 {
-            self.springs.items[i].sprung(&self.looks.items[i], self.now).position()
+            self.springs.drawn(i, &self.looks.items[i], &self.clock).position()
+        }
+
+        /// Where voxel `i` would be drawn on its cell.
+        fn home(&self, i: usize) -> Vec3 {
+            placement(0.0, 0).rotation * self.slots[i].home.position
         }
     }
 
-    /// A cursor straight down onto x = `at`, the model turned a quarter about y, frames of 1/60 s.
+    /// A cursor straight down onto x = `at`, the model turned a quarter about y.
     fn placement(at: f32, in_model: usize) -> Placement {
         Placement {
             rotation: Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
             ray: Some(Ray3d::new(Vec3::new(at, 10.0, 0.0), Dir3::NEG_Y)),
             radius: 1.5,
-            strength: 0.8,
+            last: GpuClock::default(),
             now: 0.0,
-            step: Step::new(1.0 / 60.0),
             time: 0.0,
             in_model,
             bubbles: BubbleSettings::default(),
@@ -270,67 +307,66 @@ mod tests {
     }
 
     #[test]
-    fn only_voxels_the_cursor_reaches_move() {
+    fn the_cursor_catches_the_voxels_it_reaches_and_the_gpu_pushes_them() {
         let mut voxels = Voxels::row(6, None);
         let looks = voxels.looks.items.clone();
         let p = placement(2.0, 5);
-        voxels.place(&p);
-        for i in 0..6 {
-            let reached = (1..=3).contains(&i);
-            assert_eq!(voxels.written(i), reached, "voxel {i}");
-            assert_eq!(voxels.slots[i].repel.rests(voxels.now), !reached, "voxel {i}");
-        }
+        assert!(voxels.place(&p));
+        assert_eq!(voxels.written(), vec![1, 2, 3], "caught");
+        assert!((0..6).all(|i| voxels.slots[i].repel.pulled == (1..=3).contains(&i)));
         assert_eq!(voxels.looks.items, looks, "repel rewrote looks");
-        // Voxel 1 is pushed towards −x, voxel 3 towards +x (cloud frame); the one under the cursor sideways.
-        assert!(voxels.slots[1].repel.offset.x < 0.0 && voxels.slots[3].repel.offset.x > 0.0);
-        // Drawn in the turned cloud: home + offset, rotated a quarter turn about y.
-        let expected = p.rotation * (voxels.slots[3].home.position + voxels.slots[3].repel.offset);
-        assert!(voxels.drawn(3).distance(expected) < 1e-3, "{} for {expected}", voxels.drawn(3));
-        assert!(voxels.drawn(3).distance(voxels.looks.items[3].position()) > 1e-3, "not moved");
+        // Drawn where they were, then eased onto the push (cloud frame, turned a quarter about y): voxel 1
+        // towards −x, voxel 3 towards +x, the one under the cursor sideways; nothing written meanwhile.
+        assert!(voxels.drawn(3).distance(voxels.home(3)) < 1e-6);
+        for _ in 0..60 {
+            voxels.place(&p);
+            assert!(voxels.written().is_empty(), "a still cursor rewrites springs");
+        }
+        let pushed = |v: &Voxels, i: usize| p.rotation.inverse() * (v.drawn(i) - v.home(i));
+        assert!((pushed(&voxels, 1) - Vec3::new(-0.4, 0.0, 0.0)).length() < 0.01, "{}", pushed(&voxels, 1));
+        assert!((pushed(&voxels, 3) - Vec3::new(0.4, 0.0, 0.0)).length() < 0.01, "{}", pushed(&voxels, 3));
+        assert!((pushed(&voxels, 2).length() - 1.5 * STRENGTH).abs() < 0.01);
+        assert!(voxels.drawn(0).distance(voxels.home(0)) < 1e-6 && voxels.drawn(4).distance(voxels.home(4)) < 1e-6);
     }
 
     #[test]
-    fn voxels_held_off_by_a_still_cursor_stop_being_rewritten() {
-        let mut voxels = Voxels::row(6, None);
-        let p = placement(2.0, 5);
-        for _ in 0..120 {
-            voxels.place(&p);
-        }
-        let held = voxels.slots[3].repel;
-        assert!(held.held() && held.offset.length() > 0.1, "{held:?}");
-        let before = voxels.springs.items.clone();
-        assert!(voxels.place(&p), "the cursor holds voxels");
-        assert_eq!(voxels.springs.items, before, "held voxels rewritten");
-        assert!(voxels.drawn(3).distance(p.rotation * (voxels.slots[3].home.position + held.offset)) < 1e-3);
+    fn a_moving_cursor_writes_only_the_voxels_it_catches_and_lets_go() {
+        let mut voxels = Voxels::row(12, None);
+        voxels.place(&placement(2.0, 12));
+        voxels.written();
+        voxels.place(&placement(3.0, 12));
+        assert_eq!(voxels.written(), vec![1, 4], "voxel 4 caught, voxel 1 let go; 2 and 3 follow on the GPU");
+        let pulled: Vec<usize> = (0..12).filter(|&i| voxels.slots[i].repel.pulled).collect();
+        assert_eq!(pulled, vec![2, 3, 4]);
     }
 
     #[test]
     fn spares_and_flying_voxels_are_left_alone_and_let_go_voxels_return_home_on_the_gpu() {
         let mut voxels = Voxels::row(6, None);
         voxels.slots[2].flying = true;
-        let p = placement(5.0, 5);
-        voxels.place(&p);
-        assert!(voxels.written(4) && !voxels.written(5), "a spare slot moved");
+        voxels.place(&placement(5.0, 5));
+        assert_eq!(voxels.written(), vec![4], "a spare slot was caught");
         let mut near = Voxels::row(6, None);
         near.slots[2].flying = true;
         near.place(&placement(2.0, 5));
-        assert!(!near.written(2) && near.written(1), "a flying voxel was pushed");
-        // Held voxels are let go once; then the CPU writes nothing while the GPU brings them home.
+        assert_eq!(near.written(), vec![1, 3], "a flying voxel was caught");
         for _ in 0..60 {
             near.place(&placement(2.0, 5));
         }
-        let gone = Placement { ray: None, ..p };
-        assert!(!near.place(&gone), "still held without a cursor");
-        let let_go = near.springs.items.clone();
-        let pushed = near.drawn(3).distance(gone.rotation * near.slots[3].home.position);
-        assert!(pushed > 0.1, "pushed {pushed}");
+        // Let go once, from where they are drawn; then the CPU writes nothing while the GPU brings them home.
+        let gone = Placement { ray: None, ..placement(2.0, 5) };
+        let before = near.drawn(3);
+        assert!(!near.place(&gone), "still pulled without a cursor");
+        assert_eq!(near.written(), vec![1, 3]);
+        assert!(near.drawn(3).distance(before) < 1e-3, "jumped from {before} to {}", near.drawn(3));
+        assert!(near.drawn(3).distance(near.home(3)) > 0.3);
         for _ in 0..120 {
             near.place(&gone);
+            assert!(near.written().is_empty(), "springs rewritten on their way home");
         }
-        assert_eq!(near.springs.items, let_go, "springs rewritten on their way home");
         for i in 0..5 {
-            assert!(near.drawn(i).distance(gone.rotation * near.slots[i].home.position) < 1e-5, "voxel {i}");
-            assert!(near.slots[i].repel.rests(near.now), "voxel {i}");
+            assert!(near.drawn(i).distance(near.home(i)) < 1e-5, "voxel {i}");
+            assert!(near.slots[i].repel.rests(near.clock.time), "voxel {i}");
         }
     }
 
@@ -340,36 +376,35 @@ mod tests {
         let p = Placement { radius: n as f32, ..placement(n as f32 / 2.0, n) };
         let mut voxels = Voxels::row(n, None);
         voxels.place(&p);
+        assert_eq!(voxels.written().len(), n, "every voxel caught");
+        for _ in 0..120 {
+            voxels.place(&p);
+        }
         for i in [0, VOXELS_PER_CHUNK, n - 1] {
-            let expected = p.rotation * (voxels.slots[i].home.position + voxels.slots[i].repel.offset);
-            assert!(voxels.drawn(i).distance(expected) < 1e-2, "voxel {i}");
-            assert!(!voxels.slots[i].repel.rests(voxels.now), "voxel {i}");
+            let push = voxels.clock.push(voxels.slots[i].home.position);
+            assert!(voxels.drawn(i).distance(voxels.home(i) + p.rotation * push) < 1e-2, "voxel {i}");
         }
     }
 
     #[test]
-    fn chunks_out_of_reach_holding_no_voxel_are_passed_over() {
+    fn groups_out_of_reach_pulling_no_voxel_are_passed_over() {
         let n = 3 * VOXELS_PER_CHUNK;
         let mut voxels = Voxels::row(n, None);
-        let near_first = placement(10.0, n);
-        for _ in 0..60 {
-            voxels.place(&near_first);
+        let pulling = |v: &Voxels| (0..v.groups.pulling.len()).filter(|&g| v.groups.pulling[g]).collect::<Vec<_>>();
+        voxels.place(&placement(10.0, n));
+        assert_eq!(pulling(&voxels), vec![0], "only the first group pulls voxels");
+        // The cursor moves to the last group: its voxels are caught, the first group's let go.
+        assert!(voxels.place(&placement((n - 10) as f32, n)));
+        assert_eq!(pulling(&voxels), vec![n / GROUP - 1]);
+        assert!(!voxels.slots[10].repel.pulled && voxels.slots[n - 10].repel.pulled);
+        // New homes make new balls: a middle group moved under the cursor is reached.
+        for (i, slot) in voxels.slots[VOXELS_PER_CHUNK..VOXELS_PER_CHUNK + GROUP].iter_mut().enumerate() {
+            slot.home.position = Vec3::X * (n - 10 + i % 2) as f32;
         }
-        assert_eq!(voxels.chunks.holding, vec![true, false, false], "only the first chunk holds voxels");
-        // The cursor moves to the last chunk: its voxels are reached, the first chunk's are let go.
-        let near_last = placement((n - 10) as f32, n);
-        assert!(!voxels.place(&near_last), "a voxel held on the first frame");
-        assert_eq!(voxels.chunks.holding, vec![false, false, false]);
-        let first = voxels.slots[10].repel;
-        assert!(!first.held() && first.since == voxels.now && first.offset.length() > 0.1, "{first:?}");
-        assert!(!voxels.slots[n - 10].repel.rests(voxels.now) && !voxels.written(VOXELS_PER_CHUNK + 5));
-        // New homes make new balls: the middle chunk moved under the cursor is reached.
-        for (i, slot) in voxels.slots[VOXELS_PER_CHUNK..2 * VOXELS_PER_CHUNK].iter_mut().enumerate() {
-            slot.home.position = Vec3::X * (n - 10 + i % 3) as f32;
-        }
-        voxels.chunks.refresh(&voxels.slots, 1);
-        voxels.place(&near_last);
-        assert!(voxels.written(VOXELS_PER_CHUNK + 1), "a rehomed chunk was passed over");
+        voxels.groups.refresh(&voxels.slots, 1);
+        voxels.written();
+        voxels.place(&placement((n - 10) as f32, n));
+        assert_eq!(voxels.written().len(), GROUP, "a rehomed group was passed over");
     }
 
     #[test]
@@ -381,7 +416,7 @@ mod tests {
         let mut whole = Voxels::row(3, Some(BubbleState::Whole));
         whole.place(&far);
         assert!(whole.looks.items[..3].iter().all(|v| v.shows() && v.color == COLOR));
-        let off_cell = whole.looks.items[1].position().distance(far.rotation * whole.slots[1].home.position);
+        let off_cell = whole.looks.items[1].position().distance(whole.home(1));
         assert!(off_cell > 1e-3 && off_cell < 0.3, "wobble {off_cell}");
     }
 }

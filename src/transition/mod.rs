@@ -322,7 +322,8 @@ fn step(
     if active.running.is_some() {
         active.elapsed += dt;
     }
-    *clock = GpuClock::new(clock.time + dt, active.angle, active.shown);
+    // The cursor stays as placing last set it (drawn last frame) until placing sets this frame's.
+    *clock = GpuClock { time: clock.time + dt, angle: active.angle, shown: active.shown, ..*clock };
     if let Ok(mut cloud) = cloud.single_mut() {
         cloud.rotation = active.turn();
     }

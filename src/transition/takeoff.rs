@@ -192,8 +192,8 @@ impl Takeoff {
             }
             None => {
                 let look = looks.items[i];
-                let (pushed, _) = pool.slots[i].repel.at(clock.time);
-                (turn.unturn(look.position()) + pushed, look.scale(), look.color, look.shows())
+                let drawn = springs.drawn(i, &look, clock);
+                (turn.unturn(drawn.position()), look.scale(), look.color, look.shows())
             }
         };
         slots.clone().into_par_iter().map(|i| state(flights.source(i))).collect_into_vec(&mut self.from);

@@ -4,7 +4,6 @@
 //! shown) and `GpuSpring::sprung` (place).
 
 use bevy::math::Vec3;
-use voxel_art::instancing::spring::HELD;
 use voxel_art::instancing::{GpuClock, GpuSpring, GpuVoxel, Spring, TweenShow, VoxelTween, flown};
 use wgpu::util::DeviceExt;
 
@@ -220,18 +219,26 @@ fn the_shaders_spring_is_the_rust_one() {
     let (looks, _, _) = cases();
     let mut draw = Draw(0x2545_f491_4f6c_dd1d);
     let (mut springs, mut clocks) = (Vec::new(), Vec::new());
-    for i in 0..CASES {
-        let since = if i % 5 == 0 { HELD } else { draw.f32(0.0, 100.0) };
-        let spring = Spring { offset: draw.vec3(-1.0, 1.0), velocity: draw.vec3(-12.0, 12.0), since };
+    for look in &looks {
+        let since = draw.f32(0.0, 100.0);
+        let pulled = draw.f32(0.0, 1.0) < 0.5;
+        let spring = Spring { offset: draw.vec3(-1.0, 1.0), velocity: draw.vec3(-12.0, 12.0), since, pulled };
         springs.push(GpuSpring::from(spring));
-        // Before the state, during the return and long after it.
-        let time = if since == HELD { draw.f32(0.0, 100.0) } else { since + draw.f32(-0.1, 3.0) };
-        clocks.push(GpuClock::new(time, 0.0, 0.0));
+        // A cursor ray through the voxel's home (unturned) or near it, or none; before the state, during the
+        // return and long after it.
+        let angle = (-look.x_axis[1]).atan2(look.x_axis[0]);
+        let home = voxel_art::instancing::Turn::new(bevy::math::Quat::from_rotation_y(angle)).unturn(look.position());
+        let ray = (draw.f32(0.0, 1.0) < 0.8).then(|| {
+            let direction = bevy::math::Dir3::new(draw.vec3(-1.0, 1.0)).unwrap_or(bevy::math::Dir3::NEG_Z);
+            bevy::math::Ray3d::new(home + draw.vec3(-1.0, 1.0) - *direction * 10.0, direction)
+        });
+        let clock = GpuClock::new(since + draw.f32(-0.1, 3.0), draw.f32(-7.0, 7.0), 0.0);
+        clocks.push(clock.reaching(ray, draw.f32(0.2, 2.0), draw.f32(0.0, 1.0)));
     }
     let gpu = run_on_gpu(&device, &queue, SPRUNG, &looks, bytemuck::cast_slice(&springs), &clocks);
     let mut moved = 0;
     for i in 0..CASES {
-        let cpu = springs[i].sprung(&looks[i], clocks[i].time);
+        let cpu = springs[i].sprung(&looks[i], &clocks[i]);
         let got = gpu[i];
         moved += usize::from(cpu.position().distance(looks[i].position()) > 1e-2);
         assert!(
@@ -245,6 +252,6 @@ fn the_shaders_spring_is_the_rust_one() {
             (cpu.color, cpu.x_axis, cpu.scale_y, cpu.scale_z)
         );
     }
-    // The cases cover springs held off, returning and home.
+    // The cases cover springs pushed, returning and home.
     assert!(moved > CASES / 4 && moved < CASES * 3 / 4, "{moved} of {CASES} off their looks");
 }
