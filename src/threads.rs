@@ -6,8 +6,8 @@
 //!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
 //!   spread their work over every core;
-//! - voxelization jobs run their parallel work in a pool of their own that leaves a core to the frame
-//!   ([`job_pool`]): a big model's seconds of voxelizing never take the core a frame's systems run on. A job
+//! - voxelization jobs run in a pool of their own whose threads run at a low priority ([`job_pool`]): a big
+//!   model's seconds of voxelizing take only the time the frame leaves, and a second job runs beside it. A job
 //!   is handed to that pool, not run from an async-compute thread ([`spawn_job`]): the async-compute pool has
 //!   one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited for by frames.
 
@@ -28,15 +28,31 @@ pub fn task_pools() -> TaskPoolPlugin {
     TaskPoolPlugin { task_pool_options: options }
 }
 
-/// The rayon pool voxelization jobs run in: every core but one (at least one thread). Frame systems use rayon's
-/// global pool, so a running job never queues ahead of a frame's parallel work.
+/// The rayon pool voxelization jobs run in: a thread per core, each at a low priority ([`JOB_NICENESS`]), so the
+/// frame's threads (the main world, rendering, rayon's global pool that frame systems use) always run first and a
+/// job takes only the time they leave. With more than one thread, a second job (another dropped file, a new
+/// setting) starts while a long one runs instead of queuing behind it.
 pub fn job_pool() -> &'static rayon::ThreadPool {
     static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
     POOL.get_or_init(|| {
-        let threads = bevy::tasks::available_parallelism().saturating_sub(1).max(1);
-        let builder = rayon::ThreadPoolBuilder::new().num_threads(threads).thread_name(|i| format!("voxelize-{i}"));
+        let threads = bevy::tasks::available_parallelism().max(2);
+        let builder = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("voxelize-{i}"))
+            .start_handler(|_| lower_priority());
         builder.build().expect("the operating system starts the voxelization threads")
     })
+}
+
+/// The niceness of the voxelization threads (Linux: 0 is normal, 19 the lowest priority). At 10 a busy frame
+/// thread gets about nine tenths of a core the two share.
+pub const JOB_NICENESS: i32 = 10;
+
+/// Lowers the calling thread's priority to [`JOB_NICENESS`] (Linux, where a thread has its own niceness; elsewhere
+/// the threads keep the normal priority). A failure leaves the thread at the normal priority.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), JOB_NICENESS);
 }
 
 /// Runs `work` in [`job_pool`]; the returned task (on the async-compute pool) waits for its result without
@@ -83,5 +99,19 @@ mod tests {
         assert!(thread.starts_with("voxelize-"), "the work runs in the job pool, not on {thread:?}");
         let panicked: Option<u32> = block_on(spawn_job(|| panic!("a malformed file the reader missed")));
         assert_eq!(panicked, None, "a panic comes back as None, not into the caller");
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn jobs_run_at_a_low_priority_and_a_second_runs_beside_the_first() {
+        AsyncComputeTaskPool::get_or_init(TaskPool::default);
+        let niceness = || rustix::process::getpriority_process(Some(rustix::thread::gettid())).ok();
+        assert_eq!(block_on(spawn_job(niceness)), Some(Some(JOB_NICENESS)));
+        // The first job waits for the second: it finishes only if the second starts while it runs.
+        let (sender, receiver) = std::sync::mpsc::channel();
+        let first = spawn_job(move || receiver.recv_timeout(std::time::Duration::from_secs(20)).is_ok());
+        let second = spawn_job(move || sender.send(()).is_ok());
+        assert_eq!(block_on(second), Some(true));
+        assert_eq!(block_on(first), Some(true), "the second job waited for the first");
     }
 }

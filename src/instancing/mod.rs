@@ -255,16 +255,18 @@ pub fn apply_targets(pool: &mut VoxelPool, looks: &mut GpuVoxels, targets: &[Vox
     pool.visible = targets.len().min(pool.slots.len());
 }
 
-/// Grows the pool for the model to show.
+/// Grows the pool for the model to show, and its springs with it (so the cursor's first touch makes no buffer).
 fn grow_for_current(
     mut pool: ResMut<VoxelPool>,
     mut looks: ResMut<GpuVoxels>,
+    mut springs: ResMut<GpuSprings>,
     library: Res<ModelLibrary>,
     models: Res<Assets<VoxelModelAsset>>,
     settings: Res<VoxelSettings>,
 ) {
     let needed = library.current_ready(&models).map_or(0, |(_, m)| drawn_count(m, settings.hollow));
     grow_pool(&mut pool, &mut looks, needed);
+    springs.reserve(pool.slots.len());
 }
 
 /// Logic: the pool and its layout (no GPU needed).

@@ -3,8 +3,9 @@
 //!
 //! The pool's slots, looks and springs are walked a chunk to a task (rayon over the cores), in groups of
 //! [`GROUP`] slots with a ball around their homes: a group the cursor cannot reach and that has no voxel it
-//! pulls is passed over whole. In the others, each voxel costs one distance test, and a record is written only
-//! for a voxel the cursor catches (it comes within reach) or lets go.
+//! pulls, and one wholly within its reach whose voxels it all pulls, are passed over whole (nothing of them can
+//! change). In the others, each voxel costs one distance test, and a record is written only for a voxel the
+//! cursor catches (it comes within reach) or lets go.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -50,16 +51,27 @@ pub struct Placement {
     pub bubbles: BubbleSettings,
 }
 
-/// What placing keeps per group of slots: the ball around its homes and whether the cursor pulls a voxel of it,
-/// so a group the cursor cannot reach and that it pulls none of is passed over whole.
+/// How many of a group's voxels at home the cursor pulled last frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pulled {
+    /// None of them.
+    None,
+    /// Some of them (or not known: the group is looked at).
+    Some,
+    /// All of them.
+    All,
+}
+
+/// What placing keeps per group of slots: the ball around its homes and how many of its voxels the cursor
+/// pulls, so a group that nothing can change this frame is passed over whole.
 #[derive(Debug, Default)]
 pub struct Groups {
     /// The pool's home count the balls were made for.
     homes: Option<u64>,
     /// Centre and radius of the ball around each group's homes (the cloud's frame), whole chunks of groups.
     balls: Vec<(Vec3, f32)>,
-    /// The cursor pulled a voxel of the group last frame.
-    pulling: Vec<bool>,
+    /// How many voxels of the group the cursor pulled last frame.
+    pulling: Vec<Pulled>,
 }
 
 impl Groups {
@@ -78,10 +90,12 @@ impl Groups {
                 ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
             })
             .collect();
-        // Past the last slot: groups with no slot, never reached.
+        // Every group is looked at once more: the cursor may pull a voxel of it. Past the last slot: groups with
+        // no slot, never reached.
+        let groups = self.balls.len();
         self.balls.resize(count, (Vec3::ZERO, f32::NEG_INFINITY));
-        // Every group is looked at once more: the cursor may pull a voxel of it.
-        self.pulling = vec![true; count];
+        self.pulling = vec![Pulled::Some; groups];
+        self.pulling.resize(count, Pulled::None);
         self.homes = Some(homes);
     }
 }
@@ -104,12 +118,17 @@ impl Placement {
         pieces.zip(chunks).for_each(|((slots, (mut looks, mut springs)), (balls, pulls))| {
             for (g, (ball, pulls)) in balls.iter().zip(pulls).enumerate() {
                 let range = (g * GROUP).min(slots.len())..((g + 1) * GROUP).min(slots.len());
-                if range.is_empty() || bubbles.is_none() && !*pulls && !self.reaches(*ball) {
+                let unchanged = match *pulls {
+                    Pulled::None => !self.reaches(*ball),
+                    Pulled::Some => false,
+                    Pulled::All => self.covers(*ball),
+                };
+                if range.is_empty() || bubbles.is_none() && unchanged {
                     continue;
                 }
                 let first = range.start;
                 *pulls = self.place_group(&mut slots[range], first, bubbles, &mut looks, &mut springs);
-                if *pulls {
+                if *pulls != Pulled::None {
                     pulling.store(true, Ordering::Relaxed);
                 }
             }
@@ -122,14 +141,19 @@ impl Placement {
         self.ray.is_some_and(|ray| away_from_ray(centre, ray).length() < self.radius + radius)
     }
 
+    /// Whether the cursor reaches every voxel whose home lies in `ball`.
+    fn covers(&self, (centre, radius): (Vec3, f32)) -> bool {
+        self.ray.is_some_and(|ray| away_from_ray(centre, ray).length() + radius < self.radius)
+    }
+
     /// Whether the cursor reaches a voxel at home `position`.
     #[inline]
     fn reaches_home(&self, position: Vec3) -> bool {
         self.ray.is_some_and(|ray| away_from_ray(position, ray).length_squared() < self.radius * self.radius)
     }
 
-    /// Places the group of `slots` starting at record `first` of the chunk's pieces; returns whether the cursor
-    /// pulls one of its voxels.
+    /// Places the group of `slots` starting at record `first` of the chunk's pieces; returns how many of its
+    /// voxels at home the cursor pulls.
     fn place_group(
         &self,
         slots: &mut [Slot],
@@ -137,9 +161,9 @@ impl Placement {
         bubbles: Option<&[Bubble]>,
         looks: &mut Piece<GpuVoxel>,
         springs: &mut Piece<GpuSpring>,
-    ) -> bool {
+    ) -> Pulled {
         let turn = Turn::new(self.rotation);
-        let mut pulls = false;
+        let (mut at_home, mut pulled) = (0, 0);
         for (k, slot) in slots.iter_mut().enumerate() {
             let i = first + k;
             if looks.start + i >= self.in_model || !slot.at_home() {
@@ -155,7 +179,8 @@ impl Placement {
                 };
                 springs.set(i, GpuSpring::from(*spring));
             }
-            pulls |= reached;
+            at_home += 1;
+            pulled += usize::from(reached);
             let Some(bubble) = bubbles.and_then(|b| b.get(looks.start + i)) else { continue };
             let home = &slot.home;
             let (grow, shown) = bubble.scale(&self.bubbles);
@@ -163,7 +188,11 @@ impl Placement {
             let look = turn.place(home.position + wobble, home.scale * grow, looks.items[i].color);
             looks.set(i, if shown { look } else { look.hidden() });
         }
-        pulls
+        match pulled {
+            0 => Pulled::None,
+            n if n == at_home => Pulled::All,
+            _ => Pulled::Some,
+        }
     }
 }
 
@@ -390,7 +419,9 @@ mod tests {
     fn groups_out_of_reach_pulling_no_voxel_are_passed_over() {
         let n = 3 * VOXELS_PER_CHUNK;
         let mut voxels = Voxels::row(n, None);
-        let pulling = |v: &Voxels| (0..v.groups.pulling.len()).filter(|&g| v.groups.pulling[g]).collect::<Vec<_>>();
+        let pulling = |v: &Voxels| {
+            (0..v.groups.pulling.len()).filter(|&g| v.groups.pulling[g] != Pulled::None).collect::<Vec<_>>()
+        };
         voxels.place(&placement(10.0, n));
         assert_eq!(pulling(&voxels), vec![0], "only the first group pulls voxels");
         // The cursor moves to the last group: its voxels are caught, the first group's let go.
@@ -405,6 +436,27 @@ mod tests {
         voxels.written();
         voxels.place(&placement((n - 10) as f32, n));
         assert_eq!(voxels.written().len(), GROUP, "a rehomed group was passed over");
+    }
+
+    #[test]
+    fn a_group_within_reach_whose_voxels_are_all_pulled_is_passed_over() {
+        let n = 2 * GROUP;
+        let mut voxels = Voxels::row(n, None);
+        // Squeezed into 0.13 along x: a cursor ray along x, 0.1 away, reaches every voxel and covers each group.
+        voxels.slots.iter_mut().enumerate().for_each(|(i, s)| s.home.position = Vec3::X * i as f32 * 0.001);
+        let along =
+            Placement { ray: Some(Ray3d::new(Vec3::new(-10.0, 0.0, 0.1), Dir3::X)), radius: 1.0, ..placement(0.0, n) };
+        voxels.place(&along);
+        assert_eq!(voxels.written().len(), n, "every voxel caught");
+        assert_eq!(voxels.groups.pulling[..2], [Pulled::All; 2]);
+        // Nothing of a covered group can change: it is not looked at (a voxel marked let go stays so).
+        voxels.slots[3].repel.pulled = false;
+        voxels.place(&along);
+        assert!(!voxels.slots[3].repel.pulled, "a covered group was looked at");
+        // A cursor that no longer covers it looks at it again, and catches the voxel.
+        voxels.place(&Placement { radius: 0.12, ..along });
+        assert!(voxels.slots[3].repel.pulled);
+        assert_eq!(voxels.groups.pulling[..2], [Pulled::All; 2]);
     }
 
     #[test]

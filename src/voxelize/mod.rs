@@ -4,7 +4,7 @@
 //! the same read (the `animation` plugin poses it); a static file costs what it did. A settings change
 //! re-voxelizes every model, the one on screen first, and while a setting is dragged ([`SettingDrag`]) only that
 //! one; a stale job is cancelled (the core stops at its next stage) and its result dropped (latest wins). Jobs
-//! run in [`job_pool`](crate::threads::job_pool), which leaves a core to the frame ([`spawn_job`]), and report their stage to the
+//! run in [`job_pool`](crate::threads::job_pool), whose low-priority threads leave the frame first ([`spawn_job`]), and report their stage to the
 //! model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
 //! only; a file of more than [`TILE_TRIANGLES`] triangles is not read again: its tile shows the surface of
 //! its first voxels, meshed on the worker.

@@ -1,10 +1,12 @@
 //! A big file in the app: its preview tile comes from its voxels (Bevy's glTF loader never reads it), its
-//! job reports its stages, a stale job is cancelled, and the panel's voxel memory is the model's.
+//! job reports its stages, a stale job is cancelled, a file dropped while it loads is served at once, and the
+//! panel's voxel memory is the model's.
 
 use std::time::Duration;
 
 use bevy::prelude::*;
 use voxel_art::config::AppArgs;
+use voxel_art::library::LibraryRequest;
 use voxel_art::model::{ModelLibrary, ModelStatus};
 use voxel_art::settings::VoxelSettings;
 use voxel_art::voxelize::TILE_TRIANGLES;
@@ -60,4 +62,24 @@ fn a_setting_change_cancels_the_running_job_and_the_new_one_finishes() {
     assert_eq!(entry.status, ModelStatus::Ready);
     assert!(!entry.progress.is_cancelled());
     assert_eq!(entry.progress.stage(), Stage::Done);
+}
+
+#[test]
+fn a_file_dropped_while_a_big_one_loads_is_served_beside_it() {
+    let mut app = test_app(AppArgs { models: vec![big_sphere_file()], no_shipped: true, ..default() });
+    app.update();
+    let big = app.world().resource::<ModelLibrary>().entries[0].progress.clone();
+    app.world_mut().write_message(LibraryRequest::Add(shipped("apple.glb")));
+    let mut frames = 0;
+    let apple_ready = |app: &mut App| {
+        frames += 1;
+        app.world().resource::<ModelLibrary>().entries.get(1).is_some_and(|e| e.status == ModelStatus::Ready)
+    };
+    run_until(&mut app, Duration::from_secs(120), apple_ready);
+    assert!(big.stage() < Stage::Done, "the apple waited for the big file ({frames} frames)");
+    assert!(!big.is_cancelled(), "the big file's job was given up");
+    run_until(&mut app, Duration::from_secs(120), all_settled);
+    let library = app.world().resource::<ModelLibrary>();
+    assert_eq!(library.entries[0].status, ModelStatus::Ready);
+    assert_eq!(big.stage(), Stage::Done);
 }
