@@ -100,23 +100,23 @@ impl Flights {
         self.reach.max(self.old_count).max(self.new.len()).min(pool.slots.len())
     }
 
-    /// Plans the flights of the chunks `chunks` of the pool from the states `from` of their slots (a chunk to a
-    /// task): each slot's tween, its home and the look it lands on; a slot with no part in the morph hides.
-    /// Returns when the last of them lands, in seconds after `start`.
+    /// Plans the flights of the pool's slots `slots` (whole chunks, from a chunk's first slot) from their states
+    /// `from` (a chunk to a task): each slot's tween, its home and the look it lands on; a slot with no part in
+    /// the morph hides. Returns when the last of them lands, in seconds after `start`.
     fn plan_chunks(
         &self,
-        chunks: std::ops::Range<usize>,
+        slots: std::ops::Range<usize>,
         from: &[SlotState],
         pool: &mut VoxelPool,
         looks: &mut GpuVoxels,
         tweens: &mut VoxelTweens,
         start: f32,
     ) -> f32 {
-        let (first, last) = (chunks.start * VOXELS_PER_CHUNK, (chunks.end * VOXELS_PER_CHUNK).min(pool.slots.len()));
-        let slots = pool.slots[first..last].par_chunks_mut(VOXELS_PER_CHUNK).zip(from.par_chunks(VOXELS_PER_CHUNK));
+        let chunk = slots.start / VOXELS_PER_CHUNK;
+        let slots = pool.slots[slots].par_chunks_mut(VOXELS_PER_CHUNK).zip(from.par_chunks(VOXELS_PER_CHUNK));
         slots
-            .zip(looks.pieces().skip(chunks.start))
-            .zip(tweens.pieces().skip(chunks.start))
+            .zip(looks.pieces().skip(chunk))
+            .zip(tweens.pieces().skip(chunk))
             .map(|(((slots, from), mut looks), (mut flights, in_air))| {
                 let c = looks.start / VOXELS_PER_CHUNK;
                 let mut rng = Rng::new(self.seed ^ (c as u64).wrapping_mul(0x2545_f491_4f6c_dd1d));
@@ -198,10 +198,10 @@ impl Takeoff {
         };
         slots.clone().into_par_iter().map(|i| state(flights.source(i))).collect_into_vec(&mut self.from);
         // The flights start where the voxels are, pushed or not: their springs are spent.
-        for i in slots {
+        for i in slots.clone() {
             springs.clear(i, &mut pool.slots[i]);
         }
-        let end = flights.plan_chunks(chunks.clone(), &self.from, pool, looks, tweens, clock.time);
+        let end = flights.plan_chunks(slots, &self.from, pool, looks, tweens, clock.time);
         let ends = clock.time - flights.began + end;
         self.next = chunks.end;
         if self.next * VOXELS_PER_CHUNK >= count {
