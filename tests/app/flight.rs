@@ -10,37 +10,26 @@ use wgpu::util::DeviceExt;
 /// Cases run.
 const CASES: usize = 4096;
 
-/// A compute entry point over the shader's own functions: out[i] = flown(looks[i], flights[i], i % 8, clocks[i]).
-const FLOWN: &str = "
+/// A compute entry point over the shader's own functions: out[i] = `call` of looks[i], records[i] (an array of
+/// `record`) and clocks[i].
+fn entry(record: &str, call: &str) -> String {
+    format!(
+        "
 @group(0) @binding(0) var<storage, read> looks: array<Voxel>;
-@group(0) @binding(1) var<storage, read> flights: array<Flight>;
+@group(0) @binding(1) var<storage, read> records: array<{record}>;
 @group(0) @binding(2) var<storage, read> clocks: array<Clock>;
 @group(0) @binding(3) var<storage, read_write> out: array<Voxel>;
 
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
     let i = id.x;
-    if i < arrayLength(&out) {
-        out[i] = flown(looks[i], flights[i], i % 8u, clocks[i]);
-    }
+    if i < arrayLength(&out) {{
+        out[i] = {call};
+    }}
+}}
+"
+    )
 }
-";
-
-/// out[i] = sprung(looks[i], springs[i], clocks[i]).
-const SPRUNG: &str = "
-@group(0) @binding(0) var<storage, read> looks: array<Voxel>;
-@group(0) @binding(1) var<storage, read> springs: array<Spring>;
-@group(0) @binding(2) var<storage, read> clocks: array<Clock>;
-@group(0) @binding(3) var<storage, read_write> out: array<Voxel>;
-
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i < arrayLength(&out) {
-        out[i] = sprung(looks[i], springs[i], clocks[i]);
-    }
-}
-";
 
 /// A software Vulkan device (lavapipe), if the machine has one; in CI its absence is a failure.
 fn device() -> Option<(wgpu::Device, wgpu::Queue)> {
@@ -115,12 +104,12 @@ fn cases() -> (Vec<GpuVoxel>, Vec<VoxelTween>, Vec<GpuClock>) {
     (looks, tweens, clocks)
 }
 
-/// Runs the shader's functions through `entry` over `looks`, `records` (a flight or a spring per look) and
-/// `clocks` on `device`: a voxel per look.
+/// Runs the shader's functions through `entry` (see [`entry`]) over `looks`, `records` (a flight or a spring per
+/// look) and `clocks` on `device`: a voxel per look.
 fn run_on_gpu(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
-    entry: &str,
+    entry: String,
     looks: &[GpuVoxel],
     records: &[u8],
     clocks: &[GpuClock],
@@ -129,7 +118,7 @@ fn run_on_gpu(
         .expect("the flight shader");
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("flight"),
-        source: wgpu::ShaderSource::Wgsl((source + entry).into()),
+        source: wgpu::ShaderSource::Wgsl((source + &entry).into()),
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("flight"),
@@ -190,7 +179,14 @@ fn run_on_gpu(
 fn the_shaders_flight_is_the_rust_curve() {
     let Some((device, queue)) = device() else { return };
     let (looks, tweens, clocks) = cases();
-    let gpu = run_on_gpu(&device, &queue, FLOWN, &looks, bytemuck::cast_slice(&tweens), &clocks);
+    let gpu = run_on_gpu(
+        &device,
+        &queue,
+        entry("Flight", "flown(looks[i], records[i], i % 8u, clocks[i])"),
+        &looks,
+        bytemuck::cast_slice(&tweens),
+        &clocks,
+    );
     let (mut flying, mut hidden) = (0, 0);
     for i in 0..CASES {
         let cpu = flown(&looks[i], &tweens[i], i % 8, &clocks[i]);
@@ -235,7 +231,14 @@ fn the_shaders_spring_is_the_rust_one() {
         let clock = GpuClock::new(since + draw.f32(-0.1, 3.0), draw.f32(-7.0, 7.0), 0.0);
         clocks.push(clock.reaching(ray, draw.f32(0.2, 2.0), draw.f32(0.0, 1.0)));
     }
-    let gpu = run_on_gpu(&device, &queue, SPRUNG, &looks, bytemuck::cast_slice(&springs), &clocks);
+    let gpu = run_on_gpu(
+        &device,
+        &queue,
+        entry("Spring", "sprung(looks[i], records[i], clocks[i])"),
+        &looks,
+        bytemuck::cast_slice(&springs),
+        &clocks,
+    );
     let mut moved = 0;
     for i in 0..CASES {
         let cpu = springs[i].sprung(&looks[i], &clocks[i]);
