@@ -9,6 +9,7 @@ use obvhs::bvh2::builder::build_bvh2;
 use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geom::GridTriangle;
+use crate::grid::GridTriangles;
 
 /// A triangle's bounds, padded outwards so f64 → f32 rounding never shrinks them.
 struct PaddedBounds(Aabb);
@@ -33,8 +34,8 @@ pub struct TriangleBvh {
 
 impl TriangleBvh {
     /// Builds the hierarchy (in parallel).
-    pub fn build(tris: &[GridTriangle]) -> Self {
-        let bounds: Vec<PaddedBounds> = tris.iter().map(padded).collect();
+    pub fn build(tris: &GridTriangles) -> Self {
+        let bounds: Vec<PaddedBounds> = tris.iter().map(|t| padded(&t)).collect();
         let bvh = build_bvh2(&bounds, BvhBuildParams::very_fast_build(), &mut Duration::default());
         Self { bvh }
     }

@@ -10,8 +10,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::color::{pastel, sample};
-use crate::geom::{GridTriangle, closest_point_barycentric, farther_than, point_at};
-use crate::grid::{AscendingCoords, GridSpec};
+use crate::geom::{closest_point_barycentric, farther_than, point_at};
+use crate::grid::{AscendingCoords, GridSpec, GridTriangles};
 use crate::shell::Shell;
 use crate::shell::octree::ShellOctree;
 use crate::soup::TriangleSoup;
@@ -31,18 +31,15 @@ const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
 /// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
 /// weights of its closest point. A candidate that [`farther_than`] the nearest so far is not measured (cells
 /// crossed by many triangles much smaller than a cell skip most of theirs).
-fn nearest_among(
-    tris: &[GridTriangle],
-    p: DVec3,
-    candidates: impl Iterator<Item = usize>,
-) -> Option<(usize, [f64; 3])> {
+fn nearest_among(tris: &GridTriangles, p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<(usize, [f64; 3])> {
     let mut best: Option<(usize, f64, [f64; 3])> = None;
     for t in candidates {
-        if best.is_some_and(|(_, bd, _)| farther_than(&tris[t], p, bd)) {
+        let triangle = tris.get(t);
+        if best.is_some_and(|(_, bd, _)| farther_than(&triangle, p, bd)) {
             continue;
         }
-        let w = closest_point_barycentric(p, &tris[t]);
-        let d = point_at(&tris[t], w).distance_squared(p);
+        let w = closest_point_barycentric(p, &triangle);
+        let d = point_at(&triangle, w).distance_squared(p);
         if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {
             best = Some((t, d, w));
         }
@@ -85,7 +82,7 @@ fn centre(c: [u32; 3]) -> DVec3 {
 pub(crate) fn surface_colors(
     soup: &TriangleSoup,
     spec: &GridSpec,
-    tris: &[GridTriangle],
+    tris: &GridTriangles,
     shell: &Shell,
     visible: &[u32],
 ) -> Vec<([u8; 4], u32)> {
@@ -113,7 +110,7 @@ pub(crate) fn surface_colors(
                 let p = centre(cell);
                 let nearest = match *own {
                     // One candidate is the nearest: no distance to compare.
-                    [t] => Some((t as usize, closest_point_barycentric(p, &tris[t as usize]))),
+                    [t] => Some((t as usize, closest_point_barycentric(p, &tris.get(t as usize)))),
                     _ => nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
                         let faces = FACE_STEPS.into_iter().zip(&mut face_at);
                         let near = faces.filter_map(|(step, at)| {
@@ -144,7 +141,7 @@ pub(crate) fn surface_colors(
 
 /// For each of `cells`, the nearest triangle at the centre of the nearest shell cell and the barycentric
 /// weights of its closest point there (see [`surface_colors`]).
-fn nearest_far(spec: &GridSpec, tris: &[GridTriangle], shell: &Shell, cells: &[u32]) -> Vec<Option<(usize, [f64; 3])>> {
+fn nearest_far(spec: &GridSpec, tris: &GridTriangles, shell: &Shell, cells: &[u32]) -> Vec<Option<(usize, [f64; 3])>> {
     let octree = ShellOctree::new(spec, shell);
     let octree = &octree;
     cells

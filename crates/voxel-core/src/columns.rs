@@ -8,8 +8,9 @@ use obvhs::aabb::Aabb;
 use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
+use crate::float;
 use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, projected_orientation};
-use crate::grid::GridSpec;
+use crate::grid::{GridSpec, GridTriangles};
 use crate::radix::{self, Segments};
 
 /// How a triangle's column crossings count.
@@ -109,8 +110,8 @@ fn column_center(spec: &GridSpec, col: usize) -> [f64; 2] {
 
 /// Columns whose centres lie in the closed range [lo, hi] along one axis.
 fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
-    let first = (lo - 0.5).ceil().max(0.0);
-    let last = (hi - 0.5).floor().min(f64::from(n) - 1.0);
+    let first = float::ceil(lo - 0.5).max(0.0);
+    let last = float::floor(hi - 0.5).min(f64::from(n) - 1.0);
     if first.is_nan() || last.is_nan() || first > last {
         return 0..0;
     }
@@ -171,25 +172,26 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
 
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
 /// consistent tie-break of [`covers_column`].
-pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -> Columns {
+pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles) -> Columns {
     let ny = spec.dims[1];
     let per_task = triangles_per_task(tris.len());
     let mut faces_up = vec![false; tris.len()];
-    let lists: Vec<Segments<Crossing>> = tris
-        .par_chunks(per_task)
-        .zip(faces_up.par_chunks_mut(per_task))
+    let lists: Vec<Segments<Crossing>> = faces_up
+        .par_chunks_mut(per_task)
         .enumerate()
-        .map(|(chunk_index, (chunk, up))| {
+        .map(|(chunk_index, up)| {
             let mut out = Segments::default();
-            for (k, t) in chunk.iter().enumerate() {
-                let triangle = (chunk_index * per_task + k) as u32;
+            for (k, up) in up.iter_mut().enumerate() {
+                let triangle = chunk_index * per_task + k;
+                let t = &tris.get(triangle);
+                let triangle = triangle as u32;
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 if xs.is_empty() || ys.is_empty() {
                     continue; // no column centre under the triangle's extent
                 }
                 let Some(counter_clockwise) = projected_orientation(t) else { continue };
-                up[k] = counter_clockwise;
+                *up = counter_clockwise;
                 for x in xs {
                     let px = f64::from(x) + 0.5;
                     for y in covered_run(t, counter_clockwise, px, ys.clone()) {
@@ -210,7 +212,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &[GridTriangle]) -
 }
 
 /// Every column crossing, column-major: one BVH query per column (a box around the column's line).
-pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &TriangleBvh) -> Columns {
+pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &GridTriangles, bvh: &TriangleBvh) -> Columns {
     let count = spec.dims[0] as usize * spec.dims[1] as usize;
     let crossings = (0..count)
         .into_par_iter()
@@ -220,15 +222,16 @@ pub(crate) fn crossings_by_bvh(spec: &GridSpec, tris: &[GridTriangle], bvh: &Tri
             let query = Aabb::new(Vec3A::new(x, y, f32::MIN), Vec3A::new(x, y, f32::MAX));
             let mut found = Vec::new();
             bvh.for_each_in_box(query, |t| {
-                if covers_column(&tris[t], p) {
-                    found.push(Crossing { column: col as u32, triangle: t as u32, z: depth_at(&tris[t], p) });
+                let triangle = tris.get(t);
+                if covers_column(&triangle, p) {
+                    found.push(Crossing { column: col as u32, triangle: t as u32, z: depth_at(&triangle, p) });
                 }
             });
             found.sort_unstable_by(crossing_order);
             found
         })
         .collect();
-    let faces_up = tris.par_iter().map(|t| projected_orientation(t) == Some(true)).collect();
+    let faces_up = tris.par_iter().map(|t| projected_orientation(&t) == Some(true)).collect();
     Columns::from_sorted(count, crossings, faces_up)
 }
 

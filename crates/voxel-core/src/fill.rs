@@ -30,8 +30,9 @@ use rayon::prelude::*;
 
 use crate::bvh::TriangleBvh;
 use crate::columns::{Columns, Crossing, Role, crossings_by_bvh, crossings_by_rasterizing, parity_counts};
-use crate::geom::{GridTriangle, covers_column, depth_at};
-use crate::grid::{BitGrid, GridSpec};
+use crate::float;
+use crate::geom::{covers_column, depth_at};
+use crate::grid::{BitGrid, GridSpec, GridTriangles};
 use crate::options::{FillMode, Method};
 use crate::orient::{closed_parts, winding_roles};
 use crate::soup::TriangleSoup;
@@ -40,7 +41,7 @@ use crate::soup::TriangleSoup;
 /// docs: cell k is inside when W + P ≠ 0 for the crossings at or below its centre k + 0.5.
 fn column_runs(crossings: &[Crossing], roles: &[Role], nz: u32, mut emit: impl FnMut(std::ops::Range<u32>)) {
     let parity_counts = parity_counts(crossings, roles);
-    let to_cell = |z: f64| (z - 0.5).ceil().clamp(0.0, f64::from(nz)) as u32;
+    let to_cell = |z: f64| float::ceil(z - 0.5).clamp(0.0, f64::from(nz)) as u32;
     let (mut winding, mut parity) = (0i32, 0i32);
     let mut entered: Option<f64> = None;
     for c in crossings {
@@ -81,7 +82,7 @@ fn fill_columns(spec: &GridSpec, columns: &Columns, roles: &[Role]) -> BitGrid {
 pub(crate) fn solid_fill(
     soup: &TriangleSoup,
     spec: &GridSpec,
-    tris: &[GridTriangle],
+    tris: &GridTriangles,
     fill: FillMode,
     method: Method,
     bvh: &OnceLock<TriangleBvh>,
@@ -108,7 +109,7 @@ pub(crate) fn solid_fill(
 /// winding number W as the sum of the hits' outward facings (+1 leaving upwards), P as the parity of the
 /// parity hits; inside when W + P ≠ 0 (odd hits when every role is parity, the article's rule). It uses the
 /// same robust column test as the fast paths.
-fn reference_fill(spec: &GridSpec, tris: &[GridTriangle], roles: &[Role]) -> BitGrid {
+fn reference_fill(spec: &GridSpec, tris: &GridTriangles, roles: &[Role]) -> BitGrid {
     let [nx, ny, nz] = spec.dims;
     let inside: Vec<Vec<u32>> = (0..nx * ny)
         .into_par_iter()
@@ -119,7 +120,7 @@ fn reference_fill(spec: &GridSpec, tris: &[GridTriangle], roles: &[Role]) -> Bit
                     let zc = f64::from(k) + 0.5;
                     let (mut winding, mut parity) = (0i32, 0i32);
                     for (t, role) in tris.iter().zip(roles) {
-                        if covers_column(t, p) && depth_at(t, p) > zc {
+                        if covers_column(&t, p) && depth_at(&t, p) > zc {
                             match role {
                                 Role::Parity => parity ^= 1,
                                 role => winding -= role.step(),

@@ -34,8 +34,8 @@
 //! * **Pipeline**: [`voxelize`](mod@voxelize).
 //! * **Passes**: `columns` (column crossings and how they count), `orient` (closed parts and their facing:
 //!   `parts`, `soup_parts`, `edges`, `weld`), `fill`, `shell` (`cells`, `octree`), `visible`, `color_pass`, `memory` (the budget).
-//! * **Leaf types**: [`error`], [`geom`] (exact predicates, grid triangles), `radix`, [`shapes`], [`soup`] (the
-//!   input), [`grid`] (the grid, the bit grid), [`options`], [`progress`] (stages, cancelling), [`bvh`],
+//! * **Leaf types**: [`error`], `float` (rounding without libm), [`geom`] (exact predicates), `radix`, [`shapes`], [`soup`] (the
+//!   input), [`grid`] (the grid, its triangles, the bit grid), [`options`], [`progress`] (stages, cancelling), [`bvh`],
 //!   [`color`] (sampling, sRGB, pastel),
 //!   [`model`] (the output), [`glb`].
 //!
@@ -55,6 +55,7 @@ pub mod error;
 pub mod export;
 pub mod files;
 mod fill;
+mod float;
 pub mod geom;
 pub mod glb;
 pub mod grid;
@@ -79,7 +80,7 @@ mod test_models;
 
 pub use anim::{AnimatedModel, Bounds, ClipInfo};
 pub use error::{Result, VoxelError};
-pub use grid::{BitGrid, GridSize, GridSpec};
+pub use grid::{BitGrid, GridSize, GridSpec, GridTriangles};
 pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
 pub use model::{Voxel, VoxelModel, VoxelStats};
 pub use options::{FillMode, Method, ShellMode, VoxelizeOptions};

@@ -8,11 +8,13 @@
 //! plane it faces most, so many tiny triangles (several to a cell) count one overlap each and a large
 //! triangle its area in cells.
 
+use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::error::{Result, VoxelError};
+use crate::float;
 use crate::geom::GridTriangle;
-use crate::grid::GridSpec;
+use crate::grid::{GridSpec, GridTriangles};
 use crate::options::FillMode;
 
 /// Bytes per overlap of a triangle and a cell: the shell's packed pair (8) and its sorted cell and triangle
@@ -31,9 +33,9 @@ fn bits_per_cell(fill: FillMode) -> f64 {
 
 /// The bytes a voxelization of `tris` in `spec` with `fill` will take at its peak (an estimate that errs
 /// high), besides the soup it reads.
-pub(crate) fn estimate(spec: &GridSpec, tris: &[GridTriangle], fill: FillMode) -> u64 {
-    let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(overlaps_of).sum();
-    let triangles = std::mem::size_of_val(tris) as f64;
+pub(crate) fn estimate(spec: &GridSpec, tris: &GridTriangles, fill: FillMode) -> u64 {
+    let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(|t| overlaps_of(&t)).sum();
+    let triangles = tris.vertex_bytes() as f64;
     let cells = spec.cell_count() as f64 * bits_per_cell(fill) / 8.0;
     (triangles + cells + overlaps * BYTES_PER_OVERLAP) as u64
 }
@@ -43,7 +45,8 @@ pub(crate) fn estimate(spec: &GridSpec, tris: &[GridTriangle], fill: FillMode) -
 fn overlaps_of(t: &GridTriangle) -> f64 {
     let lo = t[0].min(t[1]).min(t[2]);
     let hi = t[0].max(t[1]).max(t[2]);
-    let span = (hi.floor() - lo.floor()) + 1.0;
+    let floor = |v: DVec3| DVec3::from(v.to_array().map(float::floor));
+    let span = (floor(hi) - floor(lo)) + 1.0;
     let n = (t[1] - t[0]).cross(t[2] - t[0]).abs();
     let across = if n.x >= n.y && n.x >= n.z {
         span.y * span.z
@@ -70,7 +73,7 @@ fn available() -> Option<u64> {
 }
 
 /// Refuses a voxelization of `tris` in `spec` whose estimate exceeds `budget` bytes, naming the memory needed.
-pub(crate) fn check(spec: &GridSpec, tris: &[GridTriangle], fill: FillMode, budget: u64) -> Result<()> {
+pub(crate) fn check(spec: &GridSpec, tris: &GridTriangles, fill: FillMode, budget: u64) -> Result<()> {
     let needed = estimate(spec, tris, fill);
     if needed <= budget {
         return Ok(());

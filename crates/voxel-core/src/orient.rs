@@ -189,13 +189,12 @@ mod tests {
 
     use super::*;
     use crate::columns::crossings_by_rasterizing;
-    use crate::geom::GridTriangle;
-    use crate::grid::{GridSize, GridSpec};
+    use crate::grid::{GridSize, GridSpec, GridTriangles};
     use crate::shapes::{IndexedMesh, cuboid};
     use crate::soup::TriangleSoup;
 
-    fn grid_tris(mesh: &IndexedMesh) -> Vec<GridTriangle> {
-        mesh.triangles.iter().map(|t| t.map(|i| DVec3::from(mesh.positions[i as usize].map(f64::from)))).collect()
+    fn grid_tris(mesh: &IndexedMesh) -> GridTriangles<'_> {
+        GridTriangles::indexed(mesh.positions.iter().map(|p| DVec3::from(p.map(f64::from))).collect(), &mesh.triangles)
     }
 
     /// The roles of `mesh`'s triangles, voxelized in a 4 × 4 × 4 grid around it.

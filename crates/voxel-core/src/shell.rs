@@ -8,7 +8,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::geom::GridTriangle;
-use crate::grid::{BitGrid, GridSpec};
+use crate::grid::{BitGrid, GridSpec, GridTriangles};
 use crate::radix::{self, Segments};
 
 mod cells;
@@ -39,7 +39,7 @@ impl Shell {
     // Each triangle's normal is found again here rather than kept from the shell pass: only the cells the fill
     // leaves empty need it, far fewer than the overlaps at the default grid (measured: docs/benchmarks.md).
     #[inline(never)]
-    pub fn thin_cells(&self, spec: &GridSpec, tris: &[GridTriangle], fill: &BitGrid) -> Vec<u32> {
+    pub fn thin_cells(&self, spec: &GridSpec, tris: &GridTriangles, fill: &BitGrid) -> Vec<u32> {
         let thin = |k: usize| {
             let index = self.cells[k] as usize;
             if fill.get(index) {
@@ -47,7 +47,7 @@ impl Shell {
             }
             let c = spec.coords(index);
             self.triangles_at(k).iter().any(|&tri| {
-                let t = &tris[tri as usize];
+                let t = &tris.get(tri as usize);
                 let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
                 [step, step.map(|s| -s)].into_iter().all(|s| !spec.neighbour(c, s).is_some_and(|n| fill.get(n)))
             })
@@ -165,25 +165,50 @@ const FEW_COLUMNS: u32 = 9;
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
 /// them).
-fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segments<u64>) {
-    let t = &tris[tri];
+fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut Segments<u64>) {
+    let t = tris.get(tri);
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
         return; // zero-area triangles add no surface
     }
-    let corners = t.map(|w| w.to_array());
-    let lo = t[0].min(t[1]).min(t[2]).to_array();
-    let hi = t[0].max(t[1]).max(t[2]).to_array();
-    let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
-    let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
-    let mut push = |c: [u32; 3]| out.push(pack(spec.index(c[0], c[1], c[2]), tri));
+    let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+    let [nx, ny, nz] = spec.dims;
     // The cells of the triangle's extent.
-    let (first, last) = ([0, 1, 2].map(|a| cell_of(a, lo[a])), [0, 1, 2].map(|a| last_cell_of(a, lo[a], hi[a])));
-    if first == last {
+    let first = [cell_of(lo.x, nx), cell_of(lo.y, ny), cell_of(lo.z, nz)];
+    let last = [last_cell_of(lo.x, hi.x, nx), last_cell_of(lo.y, hi.y, ny), last_cell_of(lo.z, hi.z, nz)];
+    let crossed = (last[0] - first[0]) + (last[1] - first[1]) + (last[2] - first[2]);
+    let mut push = |c: [u32; 3]| out.push(pack(spec.index(c[0], c[1], c[2]), tri));
+    if crossed == 0 {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         push(first);
         return;
     }
+    let inside = lo.cmpge(DVec3::ZERO).all() && hi.cmple(DVec3::new(f64::from(nx), f64::from(ny), f64::from(nz))).all();
+    if crossed == 1 && inside {
+        // The triangle crosses one cell boundary, strictly (it has points on both sides of it), and lies in one
+        // cell along the other axes (in the grid, not clamped onto its edge): it overlaps the cells on both sides.
+        push(first);
+        push(last);
+        return;
+    }
+    overlaps_across(spec, &t, n, [lo.to_array(), hi.to_array()], [first, last], &mut push);
+}
+
+/// [`overlaps`] of a triangle `t` with normal `n` whose extent `lo`, `hi` spans the cells `first` to `last`
+/// (across more than one cell boundary, or clamped onto the grid's edge): each candidate cell is tested, a
+/// column along the dominant axis at a time.
+#[inline(never)]
+fn overlaps_across(
+    spec: &GridSpec,
+    t: &GridTriangle,
+    n: DVec3,
+    [lo, hi]: [[f64; 3]; 2],
+    [first, last]: [[u32; 3]; 2],
+    push: &mut impl FnMut([u32; 3]),
+) {
+    let corners = t.map(|w| w.to_array());
+    let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
+    let last_cell_of = |a: usize, from: f64, to: f64| last_cell_of(from, to, spec.dims[a]);
     let d = dominant_axis(n);
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let n = n.to_array();
@@ -237,7 +262,7 @@ fn overlaps(spec: &GridSpec, tris: &[GridTriangle], tri: usize, out: &mut Segmen
 // Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
-pub(crate) fn shell(spec: &GridSpec, tris: &[GridTriangle]) -> Shell {
+pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles) -> Shell {
     let lists: Vec<Segments<u64>> = (0..tris.len())
         .into_par_iter()
         .fold(Segments::default, |mut out, tri| {
@@ -315,6 +340,50 @@ mod tests {
     }
 
     #[test]
+    fn a_triangle_across_one_boundary_gets_the_cells_the_whole_test_gives() {
+        // Triangles smaller than a cell at coordinates snapped to 1/8 of a cell (so that many corners and edges
+        // lie on cell boundaries, the ties), in an 8³ grid.
+        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(8), 1.0, 1 << 20).unwrap();
+        assert_eq!(spec.dims, [8, 8, 8]);
+        let mut state = 3u64;
+        let mut next = |n: u64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) % n
+        };
+        let (mut across_one, mut others) = (0, 0);
+        for _ in 0..20_000 {
+            let base = [0; 3].map(|_| next(7 * 8) as f64 / 8.0);
+            let t: GridTriangle =
+                std::array::from_fn(|_| DVec3::from(base.map(|b| b + next(10) as f64 / 8.0)).min(DVec3::splat(8.0)));
+            let tris = GridTriangles::from_triangles(&[t]);
+            let mut fast = Segments::default();
+            overlaps(&spec, &tris, 0, &mut fast);
+            let fast: Vec<u64> = Segments::concat(vec![fast]).concat();
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            if n.length_squared() == 0.0 {
+                assert!(fast.is_empty());
+                continue;
+            }
+            let (lo, hi) = (t[0].min(t[1]).min(t[2]).to_array(), t[0].max(t[1]).max(t[2]).to_array());
+            let first = [0, 1, 2].map(|a| cell_of(lo[a], 8));
+            let last = [0, 1, 2].map(|a| last_cell_of(lo[a], hi[a], 8));
+            if (0..3).map(|a| last[a] - first[a]).sum::<u32>() != 1 {
+                others += 1;
+                continue;
+            }
+            across_one += 1;
+            let mut whole = Vec::new();
+            overlaps_across(&spec, &t, n, [lo, hi], [first, last], &mut |c| {
+                whole.push(pack(spec.index(c[0], c[1], c[2]), 0))
+            });
+            whole.sort_unstable();
+            assert_eq!(fast, whole, "{t:?}");
+        }
+        assert!(across_one > 5_000 && others > 1_000, "{across_one} across one boundary, {others} others");
+    }
+
+    #[test]
     fn extents_ending_on_a_boundary_stop_before_it() {
         assert_eq!([cell_of(-2.0, 10), cell_of(3.7, 10), cell_of(10.0, 10), cell_of(f64::NAN, 10)], [0, 3, 9, 0]);
         let cases = [
@@ -347,7 +416,7 @@ mod tests {
         let expected: Vec<u32> = (0..shell.cells.len())
             .filter(|&k| {
                 let index = shell.cells[k] as usize;
-                let t = |tri: u32| &tris[tri as usize];
+                let t = |tri: u32| tris.get(tri as usize);
                 let sides = |tri| {
                     let step = normal_step((t(tri)[1] - t(tri)[0]).cross(t(tri)[2] - t(tri)[0]));
                     [step, step.map(|s| -s)].map(|s| spec.offset(index, s))

@@ -375,9 +375,16 @@ impl TriangleSoup {
         {
             return Err(VoxelError::Invalid("the triangle or vertex lists differ in length".into()));
         }
+        // Each part's material and every vertex checked once, then each triangle's part: the triangles are
+        // searched for the first unusable one only when something is wrong.
+        let part_usable: Vec<bool> = self.parts.iter().map(|p| p.material < self.materials.len()).collect();
+        let all_finite = self.positions.par_iter().with_min_len(1 << 14).all(|p| p.iter().all(|c| c.is_finite()));
+        let part_ok = |part: u32| part_usable.get(part as usize) == Some(&true);
+        if all_finite && self.triangle_parts.par_iter().with_min_len(1 << 14).all(|&part| part_ok(part)) {
+            return Ok(());
+        }
         let usable = |t: usize| {
-            self.parts.get(self.triangle_parts[t] as usize).is_some_and(|p| p.material < self.materials.len())
-                && self.triangle_positions(t).as_flattened().iter().all(|c| c.is_finite())
+            part_ok(self.triangle_parts[t]) && self.triangle_positions(t).as_flattened().iter().all(|c| c.is_finite())
         };
         let Some(t) = (0..self.triangle_count()).into_par_iter().with_min_len(1 << 14).find_first(|&t| !usable(t))
         else {

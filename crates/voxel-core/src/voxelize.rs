@@ -7,8 +7,7 @@ use std::time::{Duration, Instant};
 use crate::color_pass::{pastel_all, surface_colors};
 use crate::error::{Result, VoxelError};
 use crate::fill::{reachable_from_outside, solid_fill};
-use crate::geom::GridTriangle;
-use crate::grid::{BitGrid, GridSpec, MAX_CELLS};
+use crate::grid::{BitGrid, GridSpec, GridTriangles, MAX_CELLS};
 use crate::memory;
 use crate::model::{VoxelModel, VoxelStats};
 use crate::options::{FillMode, ShellMode, VoxelizeOptions};
@@ -148,11 +147,11 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
 
 /// Checks `soup` and `options`, fits the grid of `options` to `bounds` (the soup's own when `None`) and places
 /// the soup's triangles on it.
-fn prepare(
-    soup: &TriangleSoup,
+fn prepare<'a>(
+    soup: &'a TriangleSoup,
     options: &VoxelizeOptions,
     bounds: Option<([f32; 3], [f32; 3])>,
-) -> Result<(GridSpec, Vec<GridTriangle>)> {
+) -> Result<(GridSpec, GridTriangles<'a>)> {
     let bounds = bounds.or_else(|| soup.bounds()).ok_or_else(|| VoxelError::Empty(String::new()))?;
     soup.validate()?;
     if options.fill == FillMode::None && options.shell == ShellMode::None {
@@ -177,7 +176,7 @@ fn distinct(mut values: Vec<u32>) -> usize {
 }
 
 /// The solid cells from the fill and the shell of `tris`, per the modes.
-fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &[GridTriangle]) -> BitGrid {
+fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &GridTriangles) -> BitGrid {
     let shell_bits = || {
         let mut bits = BitGrid::new(spec.cell_count());
         for &c in &shell.cells {

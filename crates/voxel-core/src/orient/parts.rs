@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use super::edges::{Edges, NO_PARTNER, SAME_DIRECTION, ascends, has_area};
 use super::weld;
-use crate::geom::GridTriangle;
+use crate::grid::GridTriangles;
 
 /// Marks a triangle that belongs to no closed part (of an open sheet, or with two corners at the same position).
 pub(crate) const NO_PART: u32 = u32::MAX;
@@ -52,9 +52,9 @@ pub(crate) struct Parts {
 
 impl Parts {
     /// Finds the closed parts of `tris`, their corners welded by their exact grid-space positions.
-    pub(crate) fn find(tris: &[GridTriangle]) -> Self {
-        let welded = weld::weld(tris.as_flattened(), |&v| weld::grid_key(v));
-        Self::of_welded(&welded.id, welded.first.len(), |t| tris[t])
+    pub(crate) fn find(tris: &GridTriangles) -> Self {
+        let welded = weld::weld_indexed(tris.vertices(), |&v| weld::grid_key(v), tris.corners());
+        Self::of_welded(&welded.id, welded.first.len(), |t| tris.get(t))
     }
 
     /// The number of closed parts.

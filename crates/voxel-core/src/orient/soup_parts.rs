@@ -17,7 +17,7 @@ use glam::DVec3;
 
 use super::parts::Parts;
 use super::weld::{all_different, grid_key, soup_key, weld, weld_indexed};
-use crate::geom::GridTriangle;
+use crate::grid::GridTriangles;
 use crate::soup::TriangleSoup;
 
 /// The closed parts of a soup's own positions.
@@ -60,7 +60,7 @@ impl SoupParts {
         let (positions, corners) = (soup.positions(), soup.triangles().as_flattened());
         // Vertices save work when corners share them (a soup of separate triangles has one a corner).
         let welded = if 2 * positions.len() <= corners.len() {
-            weld_indexed(positions, corners)
+            weld_indexed(positions, |&p| soup_key(p), corners)
         } else {
             weld(corners, |&i| soup_key(positions[i as usize]))
         };
@@ -74,9 +74,9 @@ impl SoupParts {
     }
 
     /// Whether the soup's grid triangles `tris` keep its different positions apart.
-    fn kept_apart_by(&self, tris: &[GridTriangle]) -> bool {
-        let corners = tris.as_flattened();
-        let on_grid = self.first.iter().map(|&c| grid_key(corners[c as usize]));
+    fn kept_apart_by(&self, tris: &GridTriangles) -> bool {
+        let (vertices, corners) = (tris.vertices(), tris.corners());
+        let on_grid = self.first.iter().map(|&c| grid_key(vertices[corners[c as usize] as usize]));
         all_different(self.first.len(), on_grid)
     }
 }
@@ -88,7 +88,7 @@ fn position(p: [f32; 3]) -> DVec3 {
 
 /// The closed parts of `tris`, the triangles of `soup` on a grid: the soup's own when the grid keeps its
 /// different positions apart, else found with the grid's positions.
-pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &[GridTriangle]) -> Arc<Parts> {
+pub(crate) fn closed_parts(soup: &TriangleSoup, tris: &GridTriangles) -> Arc<Parts> {
     let own = SoupParts::kept_by(soup);
     if own.kept_apart_by(tris) { Arc::clone(&own.parts) } else { Arc::new(Parts::find(tris)) }
 }
@@ -121,7 +121,7 @@ mod tests {
         mesh.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
     }
 
-    fn grid_tris(soup: &TriangleSoup, r: u32) -> Vec<GridTriangle> {
+    fn grid_tris(soup: &TriangleSoup, r: u32) -> GridTriangles<'_> {
         GridSpec::fit(soup, 9.0, GridSize::Resolution(r), 1.0, 1 << 24).unwrap().grid_triangles(soup)
     }
 
@@ -209,7 +209,12 @@ mod tests {
             let soup = crate::import::load_file(file).unwrap();
             let (positions, corners) = (soup.positions(), soup.triangles().as_flattened());
             let by_corner = weld(corners, |&i| soup_key(positions[i as usize]));
-            assert_eq!(welded_fields(weld_indexed(positions, corners)), welded_fields(by_corner), "{}", file.display());
+            assert_eq!(
+                welded_fields(weld_indexed(positions, |&p| soup_key(p), corners)),
+                welded_fields(by_corner),
+                "{}",
+                file.display()
+            );
         }
     }
 
@@ -246,7 +251,7 @@ mod tests {
         let index = [2, 1, 3, 0, 2, 1, 1, 3, 2];
         let corners: Vec<[f32; 3]> = index.iter().map(|&i| positions[i as usize]).collect();
         let by_corner = weld(&corners, |&p| soup_key(p));
-        assert_eq!(welded_fields(weld_indexed(&positions, &index)), welded_fields(by_corner));
-        assert_eq!(welded_fields(weld_indexed(&positions, &index)).0, [0, 1, 2, 2, 0, 1, 1, 2, 0]);
+        assert_eq!(welded_fields(weld_indexed(&positions, |&p| soup_key(p), &index)), welded_fields(by_corner));
+        assert_eq!(welded_fields(weld_indexed(&positions, |&p| soup_key(p), &index)).0, [0, 1, 2, 2, 0, 1, 1, 2, 0]);
     }
 }

@@ -125,9 +125,9 @@ fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: us
 /// [`weld`] of corners read from indexed source vertices (corner `c` at `positions[index[c]]`, bit for bit):
 /// welds the sources, one per vertex rather than one per corner, then numbers each corner's position in order
 /// of first appearance as [`weld`] of the corners would, so the result is the same.
-pub(crate) fn weld_indexed(positions: &[[f32; 3]], index: &[u32]) -> Welded {
+pub(crate) fn weld_indexed<T, K: Key>(positions: &[T], key: impl Fn(&T) -> K, index: &[u32]) -> Welded {
     // Source vertices are mostly at different positions: room for all of them.
-    let sources = weld_with_room(positions, |&p| soup_key(p), positions.len());
+    let sources = weld_with_room(positions, key, positions.len());
     let mut renumbered = vec![EMPTY; sources.first.len()];
     let mut welded = Welded { id: vec![0; index.len()], first: Vec::with_capacity(sources.first.len()) };
     for (c, (&source, id)) in index.iter().zip(&mut welded.id).enumerate() {
