@@ -6,16 +6,20 @@
 //! voxelize ms: `none` is `--fill none` (shell + colour: the work Open3D's surface voxelizer does), `full` the
 //! default (winding fill + shell + colour). Every run voxelizes a soup loaded afresh, so it pays what the CLI's
 //! one voxelization pays (the part analysis included). A hash of each output (every voxel: cell, colour,
-//! part, visibility) tells two builds' outputs apart.
+//! part, visibility) tells two builds' outputs apart. Last, per scene, how soon a cancelled voxelization (R=256,
+//! full) returns: cancelled 100 ms after it enters its fill stage, from another thread, as the app cancels a
+//! stale job.
 //!
 //! Words after `--`: scene names to keep (e.g. `heightfield`); `runs=N` (default 3); `write DIR` writes the
 //! scenes to DIR and stops (for `benches/open3d_compare.py --models DIR`).
 
 use std::hash::{Hash, Hasher};
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-use voxel_core::{FillMode, GridSize, VoxelizeOptions, load_file, voxelize};
+use voxel_core::{
+    FillMode, GridSize, Progress, Stage, VoxelError, VoxelizeOptions, load_file, voxelize, voxelize_watched,
+};
 
 #[path = "../tests/support/scenes.rs"]
 mod scenes;
@@ -71,6 +75,28 @@ fn measure(path: &Path, runs: usize) {
     }
     let load_ms = median(loads);
     println!("| {name} | read | {megabytes:.1} MB in {load_ms:.1} ms | {:.0} MB/s |", megabytes / load_ms * 1e3);
+    let stopped_ms = cancel_latency(path);
+    println!("| {name} | cancelled | 100 ms into its fill stage | returned {stopped_ms:.1} ms after the cancel |");
+}
+
+/// How long a voxelization of `path` (R=256, full work) takes to return once cancelled from another thread
+/// 100 ms after it enters its fill stage.
+fn cancel_latency(path: &Path) -> f64 {
+    let soup = load_file(path).expect("load a scene");
+    let options = VoxelizeOptions { grid: GridSize::Resolution(256), ..Default::default() };
+    let progress = Progress::new();
+    std::thread::scope(|scope| {
+        let run = scope.spawn(|| voxelize_watched(&soup, &options, &progress));
+        while progress.stage() < Stage::Filling {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        let cancelled = Instant::now();
+        progress.cancel();
+        let result = run.join().expect("the voxelization's thread");
+        assert!(matches!(result, Err(VoxelError::Cancelled)), "the run ended before the cancel");
+        cancelled.elapsed().as_secs_f64() * 1e3
+    })
 }
 
 fn main() {

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use crate::color::{pastel, sample};
 use crate::geom::{closest_point_barycentric, farther_than, point_at};
 use crate::grid::{AscendingCoords, GridSpec, GridTriangles};
+use crate::progress::Progress;
 use crate::shell::Shell;
 use crate::shell::octree::ShellOctree;
 use crate::soup::TriangleSoup;
@@ -79,12 +80,15 @@ fn centre(c: [u32; 3]) -> DVec3 {
 /// an open mesh's unmatched column) takes the colour of the nearest shell cell ([`ShellOctree`]; ties to the
 /// lower index), as that cell is coloured at its own centre: the inside of a sliced model shows the surface
 /// colour nearest to it, and a lookup costs a walk over cells near it, never over the triangles of a hill.
+/// Once `progress` is cancelled the remaining tasks leave their cells uncoloured (the caller's next stage ends
+/// the run).
 pub(crate) fn surface_colors(
     soup: &TriangleSoup,
     spec: &GridSpec,
     tris: &GridTriangles,
     shell: &Shell,
     visible: &[u32],
+    progress: &Progress,
 ) -> Vec<([u8; 4], u32)> {
     let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
     let mut colors = vec![NO_COLOR; visible.len()];
@@ -96,6 +100,9 @@ pub(crate) fn surface_colors(
         .enumerate()
         .flat_map_iter(|(task, (out, chunk))| {
             let mut far = Vec::new();
+            if progress.is_cancelled() {
+                return far;
+            }
             let mut coords = AscendingCoords::new(spec);
             let mut k = shell.cells.partition_point(|&c| c < chunk[0]);
             // Where the last search for each face neighbour ended: the neighbours of ascending cells ascend,
@@ -222,7 +229,7 @@ mod tests {
         let model = crate::voxelize(&soup, &options).unwrap();
         let spec = &model.spec;
         let tris = spec.grid_triangles(&soup);
-        let shell = crate::shell::shell(spec, &tris);
+        let shell = crate::shell::shell(spec, &tris, &crate::progress::Progress::new());
         let is_shell = |i: Option<usize>| i.is_some_and(|i| shell.cells.binary_search(&(i as u32)).is_ok());
         let distance2 = |a: [u32; 3], b: [u32; 3]| (0..3).map(|k| u64::from(a[k].abs_diff(b[k])).pow(2)).sum::<u64>();
         let mut far = 0;

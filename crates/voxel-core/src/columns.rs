@@ -11,6 +11,7 @@ use crate::bvh::TriangleBvh;
 use crate::float;
 use crate::geom::{GridTriangle, covers_column, depth_at, edge_side, projected_orientation};
 use crate::grid::{GridSpec, GridTriangles};
+use crate::progress::Progress;
 use crate::radix::{self, Segments};
 
 /// How a triangle's column crossings count.
@@ -171,8 +172,9 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
 }
 
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
-/// consistent tie-break of [`covers_column`].
-pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles) -> Columns {
+/// consistent tie-break of [`covers_column`]. Once `progress` is cancelled the remaining triangles are passed
+/// over (the caller's next stage ends the run).
+pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Columns {
     let ny = spec.dims[1];
     let per_task = triangles_per_task(tris.len());
     let mut faces_up = vec![false; tris.len()];
@@ -182,6 +184,9 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles) ->
         .map(|(chunk_index, up)| {
             let mut out = Segments::default();
             for (k, up) in up.iter_mut().enumerate() {
+                if progress.is_cancelled() {
+                    break;
+                }
                 let triangle = chunk_index * per_task + k;
                 let t = &tris.get(triangle);
                 let triangle = triangle as u32;

@@ -35,6 +35,7 @@ use crate::geom::{covers_column, depth_at};
 use crate::grid::{BitGrid, GridSpec, GridTriangles};
 use crate::options::{FillMode, Method};
 use crate::orient::{closed_parts, winding_roles};
+use crate::progress::Progress;
 use crate::soup::TriangleSoup;
 
 /// Calls `emit` with the runs of cells of one column that are inside by the column count of the module
@@ -78,7 +79,8 @@ fn fill_columns(spec: &GridSpec, columns: &Columns, roles: &[Role]) -> BitGrid {
 }
 
 /// The solid by the column count, with the roles of `fill` (winding or parity) and the crossings of
-/// `method`; `tris` are `soup`'s triangles on the grid `spec`.
+/// `method`; `tris` are `soup`'s triangles on the grid `spec`. Once `progress` is cancelled it stops after the
+/// crossings (cut short too) with an empty solid.
 pub(crate) fn solid_fill(
     soup: &TriangleSoup,
     spec: &GridSpec,
@@ -86,16 +88,22 @@ pub(crate) fn solid_fill(
     fill: FillMode,
     method: Method,
     bvh: &OnceLock<TriangleBvh>,
+    progress: &Progress,
 ) -> BitGrid {
     let columns = match method {
-        Method::Fast => Some(crossings_by_rasterizing(spec, tris)),
+        Method::Fast => Some(crossings_by_rasterizing(spec, tris, progress)),
         Method::Bvh => Some(crossings_by_bvh(spec, tris, bvh.get_or_init(|| TriangleBvh::build(tris)))),
         Method::Reference => None,
     };
+    if progress.is_cancelled() {
+        return BitGrid::new(spec.cell_count()); // the caller's next stage ends the run
+    }
     let roles = match fill {
-        FillMode::Winding => {
-            winding_roles(columns.as_ref(), || crossings_by_rasterizing(spec, tris), || closed_parts(soup, tris))
-        }
+        FillMode::Winding => winding_roles(
+            columns.as_ref(),
+            || crossings_by_rasterizing(spec, tris, progress),
+            || closed_parts(soup, tris),
+        ),
         _ => vec![Role::Parity; tris.len()],
     };
     match columns {

@@ -190,6 +190,7 @@ mod tests {
     use super::*;
     use crate::columns::crossings_by_rasterizing;
     use crate::grid::{GridSize, GridSpec, GridTriangles};
+    use crate::progress::Progress;
     use crate::shapes::{IndexedMesh, cuboid};
     use crate::soup::TriangleSoup;
 
@@ -202,7 +203,11 @@ mod tests {
         let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(4), 1.0, 1 << 20).unwrap();
         let tris = spec.grid_triangles(&soup);
-        winding_roles(None, || crossings_by_rasterizing(&spec, &tris), || Arc::new(Parts::find(&tris)))
+        winding_roles(
+            None,
+            || crossings_by_rasterizing(&spec, &tris, &Progress::new()),
+            || Arc::new(Parts::find(&tris)),
+        )
     }
 
     fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {
@@ -295,7 +300,7 @@ mod tests {
         speck.triangles.push([8, 9, 10]);
         let soup = TriangleSoup::from_mesh(&speck, [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(8), 1.0, 1 << 20).unwrap();
-        let columns = crossings_by_rasterizing(&spec, &spec.grid_triangles(&soup));
+        let columns = crossings_by_rasterizing(&spec, &spec.grid_triangles(&soup), &Progress::new());
         let as_in_file: Vec<Role> = columns.faces_up.iter().map(|&up| Role::facing(up)).collect();
         assert!(consistent_as_in_file(&columns, &as_in_file), "the speck must cross no column");
         assert!(analysed_ahead(&speck));

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::geom::GridTriangle;
 use crate::grid::{BitGrid, GridSpec, GridTriangles};
+use crate::progress::Progress;
 use crate::radix::{self, Segments};
 
 mod cells;
@@ -258,15 +259,18 @@ fn overlaps_across(
     }
 }
 
-/// Computes the shell of `tris` (deterministic whatever the thread count).
+/// Computes the shell of `tris` (deterministic whatever the thread count). Once `progress` is cancelled the
+/// remaining triangles are passed over: the shell is then incomplete, and the caller's next stage ends the run.
 // Out of line (called once per voxelization) so that an instruction profile can split the passes at it:
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
-pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles) -> Shell {
+pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Shell {
     let lists: Vec<Segments<u64>> = (0..tris.len())
         .into_par_iter()
         .fold(Segments::default, |mut out, tri| {
-            overlaps(spec, tris, tri, &mut out);
+            if !progress.is_cancelled() {
+                overlaps(spec, tris, tri, &mut out);
+            }
             out
         })
         .collect();
@@ -408,7 +412,7 @@ mod tests {
         let soup = TriangleSoup::from_mesh(&torus(2.0, 0.7, 20), [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(16), 1.0, 1 << 26).unwrap();
         let tris = spec.grid_triangles(&soup);
-        let shell = shell(&spec, &tris);
+        let shell = shell(&spec, &tris, &Progress::new());
         // A scattered fill: about one cell in three, the grid's faces included.
         let mut fill = BitGrid::new(spec.cell_count());
         (0..spec.cell_count()).filter(|i| (i * 2654435761) % 97 < 32).for_each(|i| fill.set(i));

@@ -86,11 +86,11 @@ fn voxelize_within_timed(
             let prepared = started.elapsed();
             progress.enter(Stage::Filling)?;
             let ((shell, shell_time), (fill, fill_time)) = rayon::join(
-                || timed(|| shell(&spec, &tris)),
+                || timed(|| shell(&spec, &tris, progress)),
                 || {
                     timed(|| match options.fill {
                         FillMode::Winding | FillMode::Parity => {
-                            solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh)
+                            solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh, progress)
                         }
                         FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
                     })
@@ -109,7 +109,7 @@ fn voxelize_within_timed(
     let solid = combine(&spec, options, fill, &shell, &tris);
     let visible = visible_cells(&spec, &solid);
     let coloring = Instant::now();
-    let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible);
+    let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, progress);
     let times = PassTimes { fill: fill_time, shell: shell_time, color: coloring.elapsed() };
     if options.pastel {
         pastel_all(&mut colors);
@@ -214,5 +214,35 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             solid
         }
         FillMode::None => shell_bits(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::columns::crossings_by_rasterizing;
+    use crate::grid::GridSize;
+    use crate::shapes::uv_sphere;
+
+    #[test]
+    fn the_long_passes_stop_once_cancelled() {
+        let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 32), [0.2, 0.6, 0.9, 1.0]);
+        let options = VoxelizeOptions { grid: GridSize::Resolution(32), ..Default::default() };
+        let (spec, tris) = prepare(&soup, &options, None).unwrap();
+        let (going, cancelled) = (Progress::new(), Progress::new());
+        cancelled.cancel();
+        let crossings = |progress| {
+            let columns = crossings_by_rasterizing(&spec, &tris, progress);
+            (0..columns.len()).map(|col| columns.column(col).len()).sum::<usize>()
+        };
+        assert!(crossings(&going) > 1000, "{}", crossings(&going));
+        assert_eq!(crossings(&cancelled), 0, "the fill's triangles are passed over");
+        let whole = shell(&spec, &tris, &going);
+        assert!(whole.cells.len() > 1000);
+        assert!(shell(&spec, &tris, &cancelled).cells.is_empty(), "the shell's triangles are passed over");
+        let colors = |progress| surface_colors(&soup, &spec, &tris, &whole, &whole.cells, progress);
+        let (coloured, left) = (colors(&going), colors(&cancelled));
+        assert!(coloured.iter().all(|&(c, _)| c == [124, 203, 243, 255]), "{:?}", coloured[0]);
+        assert!(left.iter().all(|&(c, _)| c == [255; 4]), "the cells are left uncoloured");
     }
 }

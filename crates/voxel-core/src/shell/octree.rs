@@ -126,7 +126,7 @@ mod tests {
         soup.add_mesh(&crate::shapes::cuboid([2.5, 2.5, -0.5], [3.0, 3.0, 0.5]), [1.0; 4], "box");
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(24), 1.0, 1 << 26).unwrap();
         let tris = spec.grid_triangles(&soup);
-        let shell = super::super::shell(&spec, &tris);
+        let shell = super::super::shell(&spec, &tris, &crate::progress::Progress::new());
         let octree = ShellOctree::new(&spec, &shell);
         let mut tied = 0;
         for i in (0..spec.cell_count() as u32).step_by(7) {
