@@ -62,6 +62,9 @@ impl Shell {
     }
 }
 
+/// The top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side).
+const SLAB_BITS: u32 = 6;
+
 /// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
 const THIN_CHUNK: usize = 4096;
 
@@ -166,7 +169,7 @@ const FEW_COLUMNS: u32 = 9;
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
 /// them).
-fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut Segments<u64>) {
+fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl FnMut(u64)) {
     let t = tris.get(tri);
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
@@ -178,7 +181,7 @@ fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut Segment
     let first = [cell_of(lo.x, nx), cell_of(lo.y, ny), cell_of(lo.z, nz)];
     let last = [last_cell_of(lo.x, hi.x, nx), last_cell_of(lo.y, hi.y, ny), last_cell_of(lo.z, hi.z, nz)];
     let crossed = (last[0] - first[0]) + (last[1] - first[1]) + (last[2] - first[2]);
-    let mut push = |c: [u32; 3]| out.push(pack(spec.index(c[0], c[1], c[2]), tri));
+    let mut push = |c: [u32; 3]| out(pack(spec.index(c[0], c[1], c[2]), tri));
     if crossed == 0 {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         push(first);
@@ -305,26 +308,49 @@ fn overlaps_across(
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Shell {
-    let lists: Vec<Segments<u64>> = (0..tris.len())
+    // Each task's overlaps go to lists by the top bits of their cell (a slab of the grid each), so that the
+    // slabs sort side by side, each into its own stretch of the output.
+    let bits = radix::bits_for(spec.cell_count());
+    let shift = bits.saturating_sub(SLAB_BITS);
+    let mut lists: Vec<Vec<Segments<u64>>> = (0..tris.len())
         .into_par_iter()
-        .fold(Segments::default, |mut out, tri| {
-            if !progress.is_cancelled() {
-                overlaps(spec, tris, tri, &mut out);
-            }
-            out
-        })
+        .fold(
+            || (0..1 << SLAB_BITS).map(|_| Segments::default()).collect::<Vec<_>>(),
+            |mut slabs, tri| {
+                if !progress.is_cancelled() {
+                    overlaps(spec, tris, tri, &mut |p| slabs[(p >> 32 >> shift) as usize].push(p));
+                }
+                slabs
+            },
+        )
         .collect();
-    let parts = Segments::concat(lists);
-    // The parts keep the triangles' order, so sorting by cell alone orders by (cell, triangle). The sort's last
-    // pass writes each overlap's fields to its position: the triangles are the compressed rows' already.
-    let len = parts.iter().map(Vec::len).sum();
+    // Per slab, the tasks' lists in the tasks' order: they keep the triangles' order, so sorting by cell alone
+    // orders by (cell, triangle). The sort's last pass writes each overlap's fields to its position: the
+    // triangles are the compressed rows' already.
+    let slabs: Vec<Vec<Vec<u64>>> = (0..1 << SLAB_BITS)
+        .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
+        .collect();
+    let len = slabs.iter().flatten().map(Vec::len).sum();
     let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
-    radix::sort_parts_into(
-        parts,
-        radix::bits_for(spec.cell_count()),
-        |p| (p >> 32) as u32,
-        |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
-    );
+    let (mut cells_left, mut tris_left) = (cells.as_mut_slice(), tris.as_mut_slice());
+    let mut sorts = Vec::with_capacity(slabs.len());
+    for parts in slabs {
+        let n = parts.iter().map(Vec::len).sum();
+        let (slab_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
+        cells_left = rest;
+        let (slab_tris, rest) = std::mem::take(&mut tris_left).split_at_mut(n);
+        tris_left = rest;
+        sorts.push((parts, slab_cells, slab_tris));
+    }
+    let low = (1u64 << shift) - 1;
+    sorts.into_par_iter().for_each(|(parts, cells, tris)| {
+        radix::sort_parts_into(
+            parts,
+            shift,
+            |p| ((p >> 32) & low) as u32,
+            |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
+        );
+    });
     // Compressed rows: each run of equal cells becomes one cell, in place.
     let mut offsets = Vec::new();
     let mut count = 0;
@@ -402,9 +428,8 @@ mod tests {
             let t: GridTriangle =
                 std::array::from_fn(|_| DVec3::from(base.map(|b| b + next(reach) as f64 / 8.0)).min(DVec3::splat(8.0)));
             let tris = GridTriangles::from_triangles(&[t]);
-            let mut fast = Segments::default();
-            overlaps(&spec, &tris, 0, &mut fast);
-            let fast: Vec<u64> = Segments::concat(vec![fast]).concat();
+            let mut fast = Vec::new();
+            overlaps(&spec, &tris, 0, &mut |p| fast.push(p));
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             if n.length_squared() == 0.0 {
                 assert!(fast.is_empty());
