@@ -450,7 +450,6 @@ mod tests {
                 whole.push(pack(spec.index(c[0], c[1], c[2]), 0))
             });
             whole.sort_unstable();
-            let mut fast = fast;
             fast.sort_unstable();
             assert_eq!(fast, whole, "{t:?}");
         }
