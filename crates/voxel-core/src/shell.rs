@@ -65,6 +65,9 @@ impl Shell {
 /// The top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side).
 const SLAB_BITS: u32 = 6;
 
+/// The overlaps below which consecutive slabs of [`shell`] sort together.
+const OVERLAPS_PER_SORT: usize = 1 << 16;
+
 /// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
 const THIN_CHUNK: usize = 4096;
 
@@ -332,22 +335,32 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
         .collect();
     let len = slabs.iter().flatten().map(Vec::len).sum();
     let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
+    // Consecutive slabs sort together until they hold enough overlaps to pay for a sort of their own: each sort
+    // takes its first slab's cell as key 0, and its own stretch of the output.
     let (mut cells_left, mut tris_left) = (cells.as_mut_slice(), tris.as_mut_slice());
-    let mut sorts = Vec::with_capacity(slabs.len());
-    for parts in slabs {
-        let n = parts.iter().map(Vec::len).sum();
-        let (slab_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
+    let mut sorts = Vec::new();
+    let mut slabs = slabs.into_iter().enumerate();
+    while let Some((first, parts)) = slabs.next() {
+        let mut group = parts;
+        let mut end = first + 1;
+        while group.iter().map(Vec::len).sum::<usize>() < OVERLAPS_PER_SORT {
+            let Some((_, parts)) = slabs.next() else { break };
+            group.extend(parts);
+            end += 1;
+        }
+        let n = group.iter().map(Vec::len).sum();
+        let (group_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
         cells_left = rest;
-        let (slab_tris, rest) = std::mem::take(&mut tris_left).split_at_mut(n);
+        let (group_tris, rest) = std::mem::take(&mut tris_left).split_at_mut(n);
         tris_left = rest;
-        sorts.push((parts, slab_cells, slab_tris));
+        let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
+        sorts.push((group, base, span, group_cells, group_tris));
     }
-    let low = (1u64 << shift) - 1;
-    sorts.into_par_iter().for_each(|(parts, cells, tris)| {
+    sorts.into_par_iter().for_each(|(parts, base, span, cells, tris)| {
         radix::sort_parts_into(
             parts,
-            shift,
-            |p| ((p >> 32) & low) as u32,
+            radix::bits_for(span as usize),
+            |p| ((p >> 32) - base) as u32,
             |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
         );
     });
