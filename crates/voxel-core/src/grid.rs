@@ -233,6 +233,13 @@ impl GridSpec {
     }
 }
 
+/// The triangle of `vertices` with corners `[a, b, c]` (indexed one by one: `array::map` is not always inlined,
+/// and this runs for every triangle in every pass).
+#[inline]
+fn corners_of(vertices: &[DVec3], [a, b, c]: [u32; 3]) -> GridTriangle {
+    [vertices[a as usize], vertices[b as usize], vertices[c as usize]]
+}
+
 /// Vertices placed on the grid per task of [`GridSpec::grid_triangles`].
 const VERTICES_PER_TASK: usize = 1 << 12;
 
@@ -260,9 +267,7 @@ impl<'a> GridTriangles<'a> {
     /// Triangle `t`.
     #[inline]
     pub fn get(&self, t: usize) -> GridTriangle {
-        // Indexed one by one: `array::map` is not always inlined, and this runs for every triangle in every pass.
-        let [a, b, c] = self.corners[t];
-        [self.vertices[a as usize], self.vertices[b as usize], self.vertices[c as usize]]
+        corners_of(&self.vertices, self.corners[t])
     }
 
     /// The number of triangles.
@@ -277,16 +282,12 @@ impl<'a> GridTriangles<'a> {
 
     /// The triangles in order.
     pub fn iter(&self) -> impl ExactSizeIterator<Item = GridTriangle> + '_ {
-        let vertices = self.vertices.as_slice();
-        self.corners.iter().map(move |&[a, b, c]| [vertices[a as usize], vertices[b as usize], vertices[c as usize]])
+        self.corners.iter().map(|&corners| corners_of(&self.vertices, corners))
     }
 
     /// The triangles in order, in parallel.
     pub fn par_iter(&self) -> impl IndexedParallelIterator<Item = GridTriangle> + '_ {
-        let vertices = self.vertices.as_slice();
-        self.corners
-            .par_iter()
-            .map(move |&[a, b, c]| [vertices[a as usize], vertices[b as usize], vertices[c as usize]])
+        self.corners.par_iter().map(|&corners| corners_of(&self.vertices, corners))
     }
 
     /// The vertices, each once.

@@ -35,9 +35,9 @@ fn bits_per_cell(fill: FillMode) -> f64 {
 /// high), besides the soup it reads.
 pub(crate) fn estimate(spec: &GridSpec, tris: &GridTriangles, fill: FillMode) -> u64 {
     let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(|t| overlaps_of(&t)).sum();
-    let triangles = tris.vertex_bytes() as f64;
+    let vertices = tris.vertex_bytes() as f64;
     let cells = spec.cell_count() as f64 * bits_per_cell(fill) / 8.0;
-    (triangles + cells + overlaps * BYTES_PER_OVERLAP) as u64
+    (vertices + cells + overlaps * BYTES_PER_OVERLAP) as u64
 }
 
 /// At least the cells triangle `t` overlaps: its extent in cells across the axis its normal is nearest to

@@ -209,9 +209,9 @@ fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl Fn
 }
 
 /// [`overlaps`] of a triangle `t` inside the grid that lies in one layer of cells across its dominant axis `d`,
-/// short of its upper face (cells `first` to `last`): the cell above a square of the plane across `d` overlaps the triangle exactly when
-/// the triangle's projection on that plane meets the square (closed sets; the layer holds the triangle's whole
-/// extent along `d`). Every square of the extent meets the projection's bounding box, so the test is the
+/// short of its upper face (cells `first` to `last`): the cell above a square of the plane across `d` overlaps
+/// the triangle exactly when the triangle's projection on that plane meets the square (closed sets; the layer
+/// holds the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the test is the
 /// projection's three edge normals. Grid coordinates have few enough significant bits that these products and
 /// sums are exact, as in the whole test.
 fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], push: &mut impl FnMut([u32; 3])) {
@@ -328,15 +328,35 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
         )
         .collect();
     // Per slab, the tasks' lists in the tasks' order: they keep the triangles' order, so sorting by cell alone
-    // orders by (cell, triangle). The sort's last pass writes each overlap's fields to its position: the
-    // triangles are the compressed rows' already.
+    // orders by (cell, triangle), and the sorted triangles are the compressed rows' already.
     let slabs: Vec<Vec<Vec<u64>>> = (0..1 << SLAB_BITS)
         .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
         .collect();
+    let (mut cells, tris) = sorted_by_cell(slabs, shift);
+    let len = cells.len();
+    // Compressed rows: each run of equal cells becomes one cell, in place.
+    let mut offsets = Vec::new();
+    let mut count = 0;
+    for k in 0..len {
+        if count == 0 || cells[count - 1] != cells[k] {
+            offsets.push(k as u32);
+            cells[count] = cells[k];
+            count += 1;
+        }
+    }
+    offsets.push(len as u32);
+    cells.truncate(count);
+    Shell { cells, offsets, tris }
+}
+
+/// The overlaps of `slabs` (slab `k` holding the cells whose index shifted right by `shift` is `k`, each in
+/// order of triangles), sorted by cell, split into their cells and their triangles. Consecutive slabs sort
+/// together until they hold enough overlaps to pay for a sort of their own, each sort on its own thread into its
+/// own stretch of the lists (its first slab's first cell as key 0); its last pass writes each overlap's fields
+/// to its position.
+fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>) {
     let len = slabs.iter().flatten().map(Vec::len).sum();
     let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
-    // Consecutive slabs sort together until they hold enough overlaps to pay for a sort of their own: each sort
-    // takes its first slab's cell as key 0, and its own stretch of the output.
     let (mut cells_left, mut tris_left) = (cells.as_mut_slice(), tris.as_mut_slice());
     let mut sorts = Vec::new();
     let mut slabs = slabs.into_iter().enumerate();
@@ -364,19 +384,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
             |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
         );
     });
-    // Compressed rows: each run of equal cells becomes one cell, in place.
-    let mut offsets = Vec::new();
-    let mut count = 0;
-    for k in 0..len {
-        if count == 0 || cells[count - 1] != cells[k] {
-            offsets.push(k as u32);
-            cells[count] = cells[k];
-            count += 1;
-        }
-    }
-    offsets.push(len as u32);
-    cells.truncate(count);
-    Shell { cells, offsets, tris }
+    (cells, tris)
 }
 
 #[cfg(test)]
