@@ -105,16 +105,22 @@ fn round_to_u8(x: f32) -> u8 {
 }
 
 /// The colour of triangle `t` at barycentric weights `w`: base colour factor × COLOR_0 × base-colour
-/// texture, as sRGB RGBA8.
+/// texture, as sRGB RGBA8. COLOR_0 shared by the three corners is taken as it is, so an untextured triangle of
+/// one colour has that colour wherever it is sampled ([`flat_color`]).
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
     let [a, b, c] = soup.triangle(t);
     let material = soup.material_of(t);
     let [w0, w1, w2] = w.map(|w| w as f32);
     // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).
     let lerp = |x: f32, y: f32, z: f32| w0 * x + w1 * y + w2 * z;
+    let color = if a.color == b.color && b.color == c.color {
+        a.color
+    } else {
+        std::array::from_fn(|ch| lerp(a.color[ch], b.color[ch], c.color[ch]))
+    };
     let mut rgba = [0.0f32; 4];
     for (ch, out) in rgba.iter_mut().enumerate() {
-        *out = material.base_color[ch] * lerp(a.color[ch], b.color[ch], c.color[ch]);
+        *out = material.base_color[ch] * color[ch];
     }
     if let Some(binding) = &material.texture {
         let uv = [lerp(a.uv[0], b.uv[0], c.uv[0]), lerp(a.uv[1], b.uv[1], c.uv[1])];
@@ -130,6 +136,17 @@ pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
         linear_to_srgb(rgba[2]),
         round_to_u8(rgba[3].clamp(0.0, 1.0) * 255.0),
     ]
+}
+
+/// The part and the linear COLOR_0 of triangle `t` when [`sample`] gives it one colour wherever it is
+/// sampled: its material has no texture and its three corners share their COLOR_0. Two triangles with the
+/// same flat colour sample alike (the part picks the material).
+pub fn flat_color(soup: &TriangleSoup, t: usize) -> Option<(u32, [f32; 4])> {
+    if soup.material_of(t).texture.is_some() {
+        return None;
+    }
+    let [a, b, c] = soup.triangles()[t].map(|i| soup.colors()[i as usize]);
+    (a == b && b == c).then_some((soup.triangle_parts[t], a))
 }
 
 /// RGB (0..1) → HSL (each 0..1), as three.js `Color.getHSL`.

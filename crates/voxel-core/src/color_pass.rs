@@ -9,8 +9,8 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::color::{pastel, sample};
-use crate::geom::{closest_point_barycentric, farther_than, point_at};
+use crate::color::{flat_color, pastel, sample};
+use crate::geom::{beyond, box_distance2, closest_point_barycentric, point_at};
 use crate::grid::{AscendingCoords, GridSpec, GridTriangles};
 use crate::progress::Progress;
 use crate::shell::Shell;
@@ -29,23 +29,72 @@ const FAR_PER_TASK: usize = 64;
 /// The colour of a cell that no triangle can colour (every triangle has zero area), and its part.
 const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
 
+/// Candidates whose boxes [`nearest_among`] measures before it measures any of them.
+const BOXES_AT_ONCE: usize = 64;
+
 /// The nearest triangle to grid point `p` among `candidates` (ties: lower index), with the barycentric
-/// weights of its closest point. A candidate that [`farther_than`] the nearest so far is not measured (cells
-/// crossed by many triangles much smaller than a cell skip most of theirs).
+/// weights of its closest point. Best first, up to [`BOXES_AT_ONCE`] candidates at a time: their bounding boxes'
+/// distances first, then the candidate of the nearest box is measured, then the others whose box is not
+/// [`beyond`] the nearest so far (a cell crossed by many triangles much smaller than it measures a few).
 fn nearest_among(tris: &GridTriangles, p: DVec3, candidates: impl Iterator<Item = usize>) -> Option<(usize, [f64; 3])> {
     let mut best: Option<(usize, f64, [f64; 3])> = None;
-    for t in candidates {
-        let triangle = tris.get(t);
-        if best.is_some_and(|(_, bd, _)| farther_than(&triangle, p, bd)) {
-            continue;
+    let mut candidates = candidates.peekable();
+    let mut boxes = [(0usize, 0.0f64); BOXES_AT_ONCE];
+    while candidates.peek().is_some() {
+        let mut count = 0;
+        for (slot, t) in boxes.iter_mut().zip(candidates.by_ref()) {
+            *slot = (t, box_distance2(&tris.get(t), p));
+            count += 1;
         }
-        let w = closest_point_barycentric(p, &triangle);
-        let d = point_at(&triangle, w).distance_squared(p);
-        if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {
-            best = Some((t, d, w));
+        let boxes = &boxes[..count];
+        let nearest_box = (0..count).min_by(|&a, &b| boxes[a].1.total_cmp(&boxes[b].1)).unwrap_or(0);
+        let order = std::iter::once(nearest_box).chain((0..count).filter(|&k| k != nearest_box));
+        for (t, bound) in order.map(|k| boxes[k]) {
+            if best.is_some_and(|(_, bd, _)| beyond(bound, bd)) {
+                continue;
+            }
+            let triangle = tris.get(t);
+            let w = closest_point_barycentric(p, &triangle);
+            let d = point_at(&triangle, w).distance_squared(p);
+            if best.is_none_or(|(bt, bd, _)| d.total_cmp(&bd).then(t.cmp(&bt)).is_lt()) {
+                best = Some((t, d, w));
+            }
         }
     }
     best.map(|(t, _, w)| (t, w))
+}
+
+/// Where a visible cell takes its colour from.
+enum Source {
+    /// The nearest triangle and the barycentric weights of its closest point.
+    Nearest(usize, [f64; 3]),
+    /// Every candidate is flat with this part and colour ([`flat_color`]): any of them, here the first, samples
+    /// alike, anywhere.
+    Flat(usize, (u32, [f32; 4])),
+}
+
+/// Where grid point `p` takes its colour among `candidates` (none: `None`): the nearest ([`nearest_among`]), or,
+/// when every candidate is flat with one colour and part, that colour (none is measured: a model of plain
+/// materials skips its distances).
+fn colour_source(
+    soup: &TriangleSoup,
+    tris: &GridTriangles,
+    p: DVec3,
+    candidates: impl Iterator<Item = usize> + Clone,
+) -> Option<Source> {
+    let mut rest = candidates.clone();
+    let first = rest.next()?;
+    if let Some(flat) = flat_color(soup, first)
+        && rest.clone().all(|t| flat_color(soup, t) == Some(flat))
+    {
+        return Some(Source::Flat(first, flat));
+    }
+    let nearest = match rest.next() {
+        // One candidate is the nearest: no distance to compare.
+        None => (first, closest_point_barycentric(p, &tris.get(first))),
+        Some(_) => nearest_among(tris, p, candidates)?,
+    };
+    Some(Source::Nearest(nearest.0, nearest.1))
 }
 
 /// The position of `target` in the ascending `cells` (`Ok`), or where it would be inserted (`Err`), searched
@@ -108,6 +157,7 @@ pub(crate) fn surface_colors(
             // Where the last search for each face neighbour ended: the neighbours of ascending cells ascend,
             // so each search gallops a short way from there.
             let mut face_at = [k; 6];
+            let mut last_flat = None;
             for (n, (color, &i)) in out.iter_mut().zip(chunk).enumerate() {
                 while shell.cells.get(k).is_some_and(|&c| c < i) {
                     k += 1;
@@ -116,23 +166,41 @@ pub(crate) fn surface_colors(
                 let cell = coords.of(i);
                 let p = centre(cell);
                 let nearest = match *own {
-                    // One candidate is the nearest: no distance to compare.
-                    [t] => Some((t as usize, closest_point_barycentric(p, &tris.get(t as usize)))),
-                    _ => nearest_among(tris, p, own.iter().map(|&t| t as usize)).or_else(|| {
-                        let faces = FACE_STEPS.into_iter().zip(&mut face_at);
-                        let near = faces.filter_map(|(step, at)| {
-                            let found = search_near(&shell.cells, *at, spec.neighbour(cell, step)? as u32);
-                            *at = found.unwrap_or_else(|insert| insert);
-                            found.ok()
-                        });
-                        let candidates = near.flat_map(|at| shell.triangles_at(at).iter().map(|&t| t as usize));
-                        nearest_among(tris, p, candidates)
-                    }),
+                    [] => {
+                        // The face neighbours' triangles, at most six lists.
+                        let (mut near, mut found) = ([0; 6], 0);
+                        for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
+                            let Some(neighbour) = spec.neighbour(cell, step) else { continue };
+                            match search_near(&shell.cells, *at, neighbour as u32) {
+                                Ok(k) => {
+                                    (*at, near[found]) = (k, k);
+                                    found += 1;
+                                }
+                                Err(insert) => *at = insert,
+                            }
+                        }
+                        let candidates =
+                            near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|&t| t as usize);
+                        colour_source(soup, tris, p, candidates)
+                    }
+                    _ => colour_source(soup, tris, p, own.iter().map(|&t| t as usize)),
                 };
-                match nearest {
-                    Some(nearest) => *color = color_at(nearest),
-                    None => far.push(task * CELLS_PER_TASK + n),
-                }
+                *color = match nearest {
+                    Some(Source::Nearest(t, w)) => color_at((t, w)),
+                    // Neighbouring cells mostly share their flat colour: sampled once for a run of them.
+                    Some(Source::Flat(t, flat)) => match last_flat {
+                        Some((seen, color)) if seen == flat => color,
+                        _ => {
+                            let color = color_at((t, [1.0, 0.0, 0.0]));
+                            last_flat = Some((flat, color));
+                            color
+                        }
+                    },
+                    None => {
+                        far.push(task * CELLS_PER_TASK + n);
+                        continue;
+                    }
+                };
             }
             far
         })
@@ -248,6 +316,81 @@ mod tests {
             assert_eq!((v.color, v.part), (sample(&soup, t, w), part), "cell {cell:?}");
         }
         assert!(far > 100, "{far} far cells");
+    }
+
+    #[test]
+    fn the_best_first_search_finds_the_nearest_triangle_of_a_whole_search() {
+        let mut state = 11u64;
+        let mut next = |scale: f64| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * scale
+        };
+        // Triangles much smaller than a cell crowding one cell, some large ones, and corners on a 1/4 lattice, so
+        // that distances tie (none without area: the shell lists none).
+        let mut triangles: Vec<[DVec3; 3]> = (0..700)
+            .map(|k| {
+                let size = if k % 10 == 0 { 3.0 } else { 0.2 };
+                let (base, lattice) = (DVec3::new(next(2.0), next(2.0), next(2.0)), k % 3 == 0);
+                std::array::from_fn(|_| {
+                    let p = base + DVec3::new(next(size), next(size), next(size));
+                    if lattice { (p * 4.0).round() / 4.0 } else { p }
+                })
+            })
+            .collect();
+        triangles.retain(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0);
+        assert!(triangles.len() > 500, "{}", triangles.len());
+        let tris = GridTriangles::from_triangles(&triangles);
+        for _ in 0..300 {
+            let p = DVec3::new(next(2.0), next(2.0), next(2.0));
+            let count = 1 + next(300.0) as usize;
+            let candidates: Vec<usize> = (0..count).map(|_| next(triangles.len() as f64) as usize).collect();
+            // Every candidate measured: the least distance, then the lower index.
+            let whole = candidates
+                .iter()
+                .map(|&t| {
+                    let w = closest_point_barycentric(p, &tris.get(t));
+                    (point_at(&tris.get(t), w).distance_squared(p), t, w)
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+                .map(|(_, t, w)| (t, w));
+            assert_eq!(nearest_among(&tris, p, candidates.iter().copied()), whole, "{count} candidates at {p}");
+        }
+    }
+
+    #[test]
+    fn a_cell_of_flat_triangles_takes_their_colour_as_the_nearest_would_give_it() {
+        use crate::shapes::{torus, uv_sphere};
+        use crate::{GridSize, VoxelizeOptions};
+        // A plain sphere, a torus through it with a colour per vertex, and the sphere again in another plain part.
+        let mut soup = TriangleSoup::default();
+        soup.add_mesh(&uv_sphere(1.0, 24), [0.9, 0.3, 0.2, 1.0], "plain");
+        let ring = soup.add_mesh(&torus(1.2, 0.3, 24), [1.0; 4], "ring");
+        soup.add_mesh(&uv_sphere(1.0, 24).translated([0.1, 0.0, 0.0]), [0.2, 0.3, 0.9, 1.0], "other");
+        let ring_vertices = soup.triangles().iter().zip(&soup.triangle_parts).filter(|(_, p)| **p == ring);
+        let ring_vertices: Vec<u32> = ring_vertices.flat_map(|(t, _)| *t).collect();
+        for (k, &v) in ring_vertices.iter().enumerate() {
+            soup.colors_mut()[v as usize] = [(k % 7) as f32 / 7.0, 0.5, (k % 5) as f32 / 5.0, 1.0];
+        }
+        let options = VoxelizeOptions { grid: GridSize::Resolution(40), ..Default::default() };
+        let spec = GridSpec::fit(&soup, options.model_size, options.grid, 1.0, 1 << 26).unwrap();
+        let tris = spec.grid_triangles(&soup);
+        let shell = crate::shell::shell(&spec, &tris, &Progress::new());
+        let colors = surface_colors(&soup, &spec, &tris, &shell, &shell.cells, &Progress::new());
+        let (mut flat, mut measured) = (0, 0);
+        for (k, &(color, part)) in colors.iter().enumerate() {
+            let own = shell.triangles_at(k);
+            let (t, w) =
+                nearest_among(&tris, centre(spec.coords(shell.cells[k] as usize)), own.iter().map(|&t| t as usize))
+                    .unwrap();
+            assert_eq!((color, part), (sample(&soup, t, w), soup.triangle_parts[t]), "cell {}", shell.cells[k]);
+            let first = flat_color(&soup, own[0] as usize);
+            if first.is_some() && own.iter().all(|&t| flat_color(&soup, t as usize) == first) {
+                flat += 1;
+            } else {
+                measured += 1;
+            }
+        }
+        assert!(flat > 1000 && measured > 1000, "{flat} flat cells, {measured} measured");
     }
 
     #[test]

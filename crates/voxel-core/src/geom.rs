@@ -218,14 +218,20 @@ pub fn point_at(t: &GridTriangle, w: [f64; 3]) -> DVec3 {
     t[0] * w[0] + t[1] * w[1] + t[2] * w[2]
 }
 
-/// Whether triangle `t` lies farther from `p` than the squared distance `d2`, by more than the rounding of a
-/// computed closest point (10⁻⁹ relative): its bounding box does. Such a triangle can be neither nearer nor
-/// as near as one at `d2`, so a nearest-triangle search need not measure it (outputs stay the same).
+/// The squared distance from `p` to the bounding box of triangle `t`: no point of `t` is nearer.
 #[inline]
-pub(crate) fn farther_than(t: &GridTriangle, p: DVec3, d2: f64) -> bool {
+pub(crate) fn box_distance2(t: &GridTriangle, p: DVec3) -> f64 {
     let lo = t[0].min(t[1]).min(t[2]);
     let hi = t[0].max(t[1]).max(t[2]);
-    let bound = (lo - p).max(p - hi).max(DVec3::ZERO).length_squared();
+    (lo - p).max(p - hi).max(DVec3::ZERO).length_squared()
+}
+
+/// Whether a triangle whose [`box_distance2`] from a point is `bound` lies farther from it than the squared
+/// distance `d2`, by more than the rounding of a computed closest point (10⁻⁹ relative). Such a triangle can be
+/// neither nearer nor as near as one at `d2`, so a nearest-triangle search need not measure it (outputs stay
+/// the same).
+#[inline]
+pub(crate) fn beyond(bound: f64, d2: f64) -> bool {
     bound > d2 + 1e-9 * (1.0 + bound)
 }
 

@@ -12,7 +12,6 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::error::{Result, VoxelError};
-use crate::float;
 use crate::geom::GridTriangle;
 use crate::grid::{GridSpec, GridTriangles};
 use crate::options::FillMode;
@@ -34,19 +33,22 @@ fn bits_per_cell(fill: FillMode) -> f64 {
 /// The bytes a voxelization of `tris` in `spec` with `fill` will take at its peak (an estimate that errs
 /// high), besides the soup it reads.
 pub(crate) fn estimate(spec: &GridSpec, tris: &GridTriangles, fill: FillMode) -> u64 {
-    let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(|t| overlaps_of(&t)).sum();
+    let top = DVec3::from(spec.dims.map(f64::from));
+    let overlaps: f64 = tris.par_iter().with_min_len(1 << 14).map(|t| overlaps_of(&t, top)).sum();
     let vertices = tris.vertex_bytes() as f64;
     let cells = spec.cell_count() as f64 * bits_per_cell(fill) / 8.0;
     (vertices + cells + overlaps * BYTES_PER_OVERLAP) as u64
 }
 
-/// At least the cells triangle `t` overlaps: its extent in cells across the axis its normal is nearest to
-/// (the cells of its projection's bounding box, one at the least), plus one layer.
-fn overlaps_of(t: &GridTriangle) -> f64 {
+/// At least the cells triangle `t` overlaps in a grid of `top` cells along each axis: its extent in cells
+/// across the axis its normal is nearest to (the cells of its projection's bounding box within the grid, one at
+/// the least), plus one layer.
+fn overlaps_of(t: &GridTriangle, top: DVec3) -> f64 {
     let lo = t[0].min(t[1]).min(t[2]);
     let hi = t[0].max(t[1]).max(t[2]);
-    let floor = |v: DVec3| DVec3::from(v.to_array().map(float::floor));
-    let span = (floor(hi) - floor(lo)) + 1.0;
+    // Within the grid (where the shell clamps it) a coordinate is not negative: its floor is its truncation.
+    let cell = |v: DVec3| v.clamp(DVec3::ZERO, top).as_uvec3().as_dvec3();
+    let span = (cell(hi) - cell(lo)) + 1.0;
     let n = (t[1] - t[0]).cross(t[2] - t[0]).abs();
     let across = if n.x >= n.y && n.x >= n.z {
         span.y * span.z
