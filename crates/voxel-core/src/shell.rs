@@ -199,20 +199,27 @@ fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl Fn
         return;
     }
     let d = dominant_axis(n);
-    // (A triangle whose extent ends on the layer's upper face, touching it, takes the whole test: there the column
-    // test puts a column that meets the triangle only on that face in the layer above.)
-    if first[d] == last[d] && inside && hi[d] < f64::from(first[d] + 1) {
+    if inside && in_one_layer(first[d], last[d], hi[d], spec.dims[d]) {
         overlaps_in_layer(&t, d, [first, last], &mut push);
         return;
     }
     overlaps_across(spec, &t, n, [lo.to_array(), hi.to_array()], [first, last], &mut push);
 }
 
-/// [`overlaps`] of a triangle `t` inside the grid that lies in one layer of cells across its dominant axis `d`,
-/// short of its upper face (cells `first` to `last`): the cell above a square of the plane across `d` overlaps
-/// the triangle exactly when the triangle's projection on that plane meets the square (closed sets; the layer
-/// holds the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the test is the
-/// projection's three edge normals. Grid coordinates have few enough significant bits that these products and
+/// Whether a triangle inside the grid whose extent along its dominant axis ends at `hi` (in cells `first` to
+/// `last` of `cells`) lies in one layer of cells for [`overlaps_in_layer`]: one cell along the axis, short of the
+/// layer's upper face or in the grid's top layer. (A triangle whose extent ends on a lower layer's upper face,
+/// touching it, takes the whole test: there the column test puts a column that meets the triangle only on that
+/// face in the layer above; the top layer has none above it.)
+fn in_one_layer(first: u32, last: u32, hi: f64, cells: u32) -> bool {
+    first == last && (hi < f64::from(first + 1) || first + 1 == cells)
+}
+
+/// [`overlaps`] of a triangle `t` inside the grid that lies in one layer of cells across its dominant axis `d`
+/// ([`in_one_layer`]; cells `first` to `last`): the cell above a square of the plane across `d` overlaps the
+/// triangle exactly when the triangle's projection on that plane meets the square (closed sets; the layer holds
+/// the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the
+/// test is the projection's three edge normals. Grid coordinates have few enough significant bits that these products and
 /// sums are exact, as in the whole test.
 fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], push: &mut impl FnMut([u32; 3])) {
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
@@ -442,7 +449,7 @@ mod tests {
             state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (state >> 33) % n
         };
-        let (mut across_one, mut in_layer) = (0, 0);
+        let (mut across_one, mut in_layer, mut in_top_layer) = (0, 0, 0);
         for _ in 0..100_000 {
             let base = [0; 3].map(|_| next(7 * 8) as f64 / 8.0);
             let reach = [10, 10, 20, 40][next(4) as usize];
@@ -463,7 +470,10 @@ mod tests {
             match (0..3).map(|a| last[a] - first[a]).sum::<u32>() {
                 0 => continue,
                 1 => across_one += 1,
-                _ if first[d] == last[d] && hi[d] < f64::from(first[d] + 1) => in_layer += 1,
+                _ if in_one_layer(first[d], last[d], hi[d], 8) => {
+                    in_layer += 1;
+                    in_top_layer += usize::from(hi[d] == 8.0);
+                }
                 _ => continue,
             }
             let mut whole = Vec::new();
@@ -475,6 +485,7 @@ mod tests {
             assert_eq!(fast, whole, "{t:?}");
         }
         assert!(across_one > 5_000 && in_layer > 5_000, "{across_one} across one boundary, {in_layer} in a layer");
+        assert!(in_top_layer > 500, "{in_top_layer} on the grid's upper face");
     }
 
     #[test]
