@@ -320,11 +320,8 @@ mod tests {
 
     #[test]
     fn the_best_first_search_finds_the_nearest_triangle_of_a_whole_search() {
-        let mut state = 11u64;
-        let mut next = |scale: f64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * scale
-        };
+        let mut random = crate::lcg::Lcg::new(11);
+        let mut next = |scale: f64| random.unit(scale);
         // Triangles much smaller than a cell crowding one cell, some large ones, and corners on a 1/4 lattice, so
         // that distances tie (none without area: the shell lists none).
         let mut triangles: Vec<[DVec3; 3]> = (0..700)

@@ -252,11 +252,8 @@ mod tests {
     #[test]
     fn covered_runs_are_the_columns_that_pass_the_column_test() {
         // Corners on a lattice of half cells (edges through column centres: the tie-break) and finer ones.
-        let mut state = 5u64;
-        let mut next = |steps: u64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 33) % steps
-        };
+        let mut random = crate::lcg::Lcg::new(5);
+        let mut next = |steps: u64| random.below(steps);
         let mut covered = 0;
         for k in 0..3000 {
             let step = [0.5, 1.0 / 64.0][k % 2];

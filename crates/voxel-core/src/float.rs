@@ -46,9 +46,9 @@ mod tests {
         values.extend([WHOLE, -WHOLE, WHOLE - 0.5, -(WHOLE - 0.5), WHOLE / 2.0 + 0.5, 2.0 * WHOLE + 2.0]);
         // Multiples of small powers of two (the grid's snapped coordinates) and scattered values.
         values.extend((-2000..2000).map(|k| f64::from(k) / 64.0));
-        let mut state = 11u64;
+        let mut random = crate::lcg::Lcg::new(11);
         for _ in 0..20_000 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let state = random.next_u64();
             let bits = state >> 1;
             values.push(f64::from_bits(bits) * if state & 1 == 0 { 1.0 } else { -1.0 });
             values.push((bits >> 11) as f64 / (1u64 << 40) as f64 - 4096.0);

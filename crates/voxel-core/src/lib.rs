@@ -60,6 +60,8 @@ pub mod geom;
 pub mod glb;
 pub mod grid;
 pub mod import;
+#[cfg(test)]
+mod lcg;
 mod memory;
 pub mod model;
 pub mod options;

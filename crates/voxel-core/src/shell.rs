@@ -341,8 +341,9 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
         .collect();
     let (mut cells, tris) = sorted_by_cell(slabs, shift);
     let len = cells.len();
-    // Compressed rows: each run of equal cells becomes one cell, in place.
-    let mut offsets = Vec::new();
+    // Compressed rows: each run of equal cells becomes one cell, in place. (Room for the most offsets there can be:
+    // only the pages written are touched, where a growing list would copy itself into new ones.)
+    let mut offsets = Vec::with_capacity(len + 1);
     let mut count = 0;
     for k in 0..len {
         if count == 0 || cells[count - 1] != cells[k] {
@@ -404,11 +405,8 @@ mod tests {
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
-        let mut state = 7u64;
-        let mut next = |scale: f64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * scale
-        };
+        let mut random = crate::lcg::Lcg::new(7);
+        let mut next = |scale: f64| random.unit(scale);
         let (mut inside_cells, mut outside_cells) = (0, 0);
         for _ in 0..200 {
             let t: GridTriangle = std::array::from_fn(|_| DVec3::new(next(12.0), next(12.0), next(12.0)));
@@ -444,11 +442,8 @@ mod tests {
         let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(8), 1.0, 1 << 20).unwrap();
         assert_eq!(spec.dims, [8, 8, 8]);
-        let mut state = 3u64;
-        let mut next = |n: u64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 33) % n
-        };
+        let mut random = crate::lcg::Lcg::new(3);
+        let mut next = |n: u64| random.below(n);
         let (mut across_one, mut in_layer, mut in_top_layer) = (0, 0, 0);
         for _ in 0..100_000 {
             let base = [0; 3].map(|_| next(7 * 8) as f64 / 8.0);

@@ -15,24 +15,58 @@ const COLUMNS_PER_TASK: usize = 256;
 pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
     let [nx, ny, nz] = spec.dims.map(|d| d as usize);
     let columns = nx * ny;
-    let blocks: Vec<Vec<u32>> = (0..columns.div_ceil(COLUMNS_PER_TASK))
+    // Calls `words` with each word of visible cells of a task's columns (the first cell's index, the word).
+    let task = |task: usize, words: &mut dyn FnMut(usize, u64)| {
+        for col in task * COLUMNS_PER_TASK..((task + 1) * COLUMNS_PER_TASK).min(columns) {
+            let (x, y) = (col / ny, col % ny);
+            let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
+            column_visible(solid, col * nz, nz, side_open, [ny * nz, nz], words);
+        }
+    };
+    // Counted first, then written in place: each task writes its cells once, into its own stretch of the output
+    // (lists per task and their concatenation wrote every cell twice, into twice the pages: a fresh process pays
+    // a fault for each).
+    let tasks = columns.div_ceil(COLUMNS_PER_TASK);
+    let counts: Vec<usize> = (0..tasks)
         .into_par_iter()
-        .map(|block| {
-            let mut out = Vec::new();
-            for col in block * COLUMNS_PER_TASK..((block + 1) * COLUMNS_PER_TASK).min(columns) {
-                let (x, y) = (col / ny, col % ny);
-                let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
-                column_visible(solid, col * nz, nz, side_open, [ny * nz, nz], &mut out);
-            }
-            out
+        .map(|t| {
+            let mut count = 0;
+            task(t, &mut |_, word| count += word.count_ones() as usize);
+            count
         })
         .collect();
-    blocks.concat()
+    let mut visible = vec![0u32; counts.iter().sum()];
+    let mut stretches = Vec::with_capacity(tasks);
+    let mut rest = visible.as_mut_slice();
+    for &count in &counts {
+        let (stretch, tail) = std::mem::take(&mut rest).split_at_mut(count);
+        stretches.push(stretch);
+        rest = tail;
+    }
+    stretches.into_par_iter().enumerate().for_each(|(t, stretch)| {
+        let mut next = 0;
+        task(t, &mut |at, mut word| {
+            while word != 0 {
+                stretch[next] = (at + word.trailing_zeros() as usize) as u32;
+                next += 1;
+                word &= word - 1;
+            }
+        });
+    });
+    visible
 }
 
-/// Appends the visible cells of the column starting at cell `base` (`nz` cells; `strides` are the steps to
-/// the neighbouring columns along x and y, which exist unless `side_open`).
-fn column_visible(solid: &BitGrid, base: usize, nz: usize, side_open: bool, strides: [usize; 2], out: &mut Vec<u32>) {
+/// Calls `words` with each non-empty word of visible cells of the column starting at cell `base` (`nz` cells; bit
+/// k of a word starting at cell `at` is cell `at + k`); `strides` are the steps to the neighbouring columns along
+/// x and y, which exist unless `side_open`.
+fn column_visible(
+    solid: &BitGrid,
+    base: usize,
+    nz: usize,
+    side_open: bool,
+    strides: [usize; 2],
+    words: &mut dyn FnMut(usize, u64),
+) {
     let mut z0 = 0;
     while z0 < nz {
         let n = (nz - z0).min(64);
@@ -49,10 +83,8 @@ fn column_visible(solid: &BitGrid, base: usize, nz: usize, side_open: bool, stri
                     strides.iter().fold(u64::MAX, |acc, &s| acc & solid.bits(at - s, n) & solid.bits(at + s, n));
                 filled & !(above & below & sides)
             };
-            let mut bits = exposed;
-            while bits != 0 {
-                out.push((at + bits.trailing_zeros() as usize) as u32);
-                bits &= bits - 1;
+            if exposed != 0 {
+                words(at, exposed);
             }
         }
         z0 += n;
@@ -84,10 +116,9 @@ mod tests {
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(70), 1.0, 1 << 26).unwrap();
         assert_eq!(spec.dims, [5, 3, 70]);
         let mut solid = BitGrid::new(spec.cell_count());
-        let mut state = 12345u64;
+        let mut random = crate::lcg::Lcg::new(12345);
         for i in 0..spec.cell_count() {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            if state >> 60 != 0 {
+            if random.next_u64() >> 60 != 0 {
                 solid.set(i);
             }
         }

@@ -121,7 +121,7 @@ fn voxelize_within_timed(
         surface: shell.cells.len(),
         visible: visible.len(),
         // Interior voxels copy visible ones, so the visible cells hold every colour.
-        colors: distinct(colors.iter().map(|c| u32::from_le_bytes(c.0)).collect()),
+        colors: distinct(colors.iter().map(|c| u32::from_le_bytes(c.0))),
     };
     let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
     let solid = (!options.hollow).then_some(solid);
@@ -167,10 +167,16 @@ fn prepare<'a>(
 }
 
 /// The number of distinct values.
-fn distinct(mut values: Vec<u32>) -> usize {
-    // Neighbouring cells often share a colour: drop repeats before sorting.
-    values.dedup();
-    let mut values = radix::sort_by_key(values, u32::BITS, |&v| v);
+fn distinct(values: impl Iterator<Item = u32>) -> usize {
+    // Neighbouring cells often share a colour: repeats are dropped as the values are collected (a model of a few
+    // flat colours writes a short list, not one as long as its cells).
+    let mut runs: Vec<u32> = Vec::new();
+    for v in values {
+        if runs.last() != Some(&v) {
+            runs.push(v);
+        }
+    }
+    let mut values = radix::sort_by_key(runs, u32::BITS, |&v| v);
     values.dedup();
     values.len()
 }

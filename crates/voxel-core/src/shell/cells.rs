@@ -186,11 +186,8 @@ mod tests {
     /// Random triangles on a coarse lattice (so that corners, edges and planes often pass exactly through
     /// cell corners, edges and faces: the ties of the test), and finer ones.
     fn triangles(count: usize) -> Vec<GridTriangle> {
-        let mut state = 99u64;
-        let mut next = |steps: u64| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 33) % steps
-        };
+        let mut random = crate::lcg::Lcg::new(99);
+        let mut next = |steps: u64| random.below(steps);
         (0..count)
             .map(|k| {
                 let step = [0.5, 0.25, 1.0 / 1024.0][k % 3];
