@@ -76,7 +76,7 @@ enum Source {
 /// Where grid point `p` takes its colour among `candidates` (none: `None`): the nearest ([`nearest_among`]), or,
 /// when every candidate is flat with one colour and part, that colour (none is measured: a model of plain
 /// materials skips its distances).
-fn colour_source(
+fn color_source(
     soup: &TriangleSoup,
     tris: &GridTriangles,
     p: DVec3,
@@ -181,9 +181,9 @@ pub(crate) fn surface_colors(
                         }
                         let candidates =
                             near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|&t| t as usize);
-                        colour_source(soup, tris, p, candidates)
+                        color_source(soup, tris, p, candidates)
                     }
-                    _ => colour_source(soup, tris, p, own.iter().map(|&t| t as usize)),
+                    _ => color_source(soup, tris, p, own.iter().map(|&t| t as usize)),
                 };
                 *color = match nearest {
                     Some(Source::Nearest(t, w)) => color_at((t, w)),
@@ -191,7 +191,7 @@ pub(crate) fn surface_colors(
                     Some(Source::Flat(t, flat)) => match last_flat {
                         Some((seen, color)) if seen == flat => color,
                         _ => {
-                            let color = color_at((t, [1.0, 0.0, 0.0]));
+                            let color = color_at((t, [1.0, 0.0, 0.0])); // any weights: its first corner
                             last_flat = Some((flat, color));
                             color
                         }

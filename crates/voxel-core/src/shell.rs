@@ -219,8 +219,8 @@ fn in_one_layer(first: u32, last: u32, hi: f64, cells: u32) -> bool {
 /// ([`in_one_layer`]; cells `first` to `last`): the cell above a square of the plane across `d` overlaps the
 /// triangle exactly when the triangle's projection on that plane meets the square (closed sets; the layer holds
 /// the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the
-/// test is the projection's three edge normals. Grid coordinates have few enough significant bits that these products and
-/// sums are exact, as in the whole test.
+/// test is the projection's three edge normals. Grid coordinates have few enough significant bits that these
+/// products and sums are exact, as in the whole test.
 fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], push: &mut impl FnMut([u32; 3])) {
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let p = [t[0], t[1], t[2]].map(|w| [w[u], w[v]]);

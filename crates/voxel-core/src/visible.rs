@@ -16,7 +16,7 @@ pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
     let [nx, ny, nz] = spec.dims.map(|d| d as usize);
     let columns = nx * ny;
     // Calls `words` with each word of visible cells of a task's columns (the first cell's index, the word).
-    let task = |task: usize, words: &mut dyn FnMut(usize, u64)| {
+    let scan = |task: usize, words: &mut dyn FnMut(usize, u64)| {
         for col in task * COLUMNS_PER_TASK..((task + 1) * COLUMNS_PER_TASK).min(columns) {
             let (x, y) = (col / ny, col % ny);
             let side_open = x == 0 || y == 0 || x + 1 == nx || y + 1 == ny;
@@ -31,7 +31,7 @@ pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
         .into_par_iter()
         .map(|t| {
             let mut count = 0;
-            task(t, &mut |_, word| count += word.count_ones() as usize);
+            scan(t, &mut |_, word| count += word.count_ones() as usize);
             count
         })
         .collect();
@@ -45,7 +45,7 @@ pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
     }
     stretches.into_par_iter().enumerate().for_each(|(t, stretch)| {
         let mut next = 0;
-        task(t, &mut |at, mut word| {
+        scan(t, &mut |at, mut word| {
             while word != 0 {
                 stretch[next] = (at + word.trailing_zeros() as usize) as u32;
                 next += 1;
