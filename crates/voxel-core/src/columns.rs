@@ -187,9 +187,8 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, pr
                 if progress.is_cancelled() {
                     break;
                 }
-                let triangle = chunk_index * per_task + k;
-                let t = &tris.get(triangle);
-                let triangle = triangle as u32;
+                let index = chunk_index * per_task + k;
+                let (t, triangle) = (&tris.get(index), index as u32);
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 if xs.is_empty() || ys.is_empty() {
