@@ -180,7 +180,7 @@ impl ModelLibrary {
         self.entries.len() - 1
     }
 
-    /// Adds a file or every model in a folder; returns the index of the first added. A path that is
+    /// Adds a file (a named pipe too) or every model in a folder; returns the index of the first added. A path that is
     /// neither becomes a failed entry, so the panel shows why.
     pub fn add_path(&mut self, path: &Path) -> Option<usize> {
         let files =
@@ -189,7 +189,7 @@ impl ModelLibrary {
         for file in files {
             let name =
                 file.file_stem().map_or_else(|| file.display().to_string(), |s| s.to_string_lossy().into_owned());
-            let index = if !file.is_file() {
+            let index = if !file.exists() {
                 self.add_failed(name, &file, format!("cannot read {}: no such file", file.display()))
             } else if !voxel_core::files::is_model_file(&file) {
                 self.add_failed(name, &file, format!("{} is not a .glb or .gltf file", file.display()))

@@ -6,8 +6,8 @@
 //! one; a stale job is cancelled (the core stops at its next stage) and its result dropped (latest wins). Jobs
 //! run in [`job_pool`](crate::threads::job_pool), whose low-priority threads leave the frame first ([`spawn_job`]), and report their stage to the
 //! model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
-//! only; a file of more than [`TILE_TRIANGLES`] triangles is not read again: its tile shows the surface of
-//! its first voxels, meshed on the worker.
+//! only; a file of more than [`TILE_TRIANGLES`] triangles, or one that can be read only once (a pipe), is not
+//! read again: its tile shows the surface of its first voxels, meshed on the worker.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -57,8 +57,10 @@ struct Imported {
     animation: Option<AnimatedModel>,
     /// Why the file's animation data was refused (the model then shows still).
     animation_error: Option<String>,
-    /// For a file of more than [`TILE_TRIANGLES`] triangles, read now: its preview tile.
+    /// For a file of more than [`TILE_TRIANGLES`] triangles or one read once, read now: its preview tile.
     tile: Option<Mesh>,
+    /// Whether the file's voxels make its tile (see [`Imported::tile`]): it is big, or it cannot be read again.
+    tile_from_voxels: bool,
 }
 
 /// What a job starts from: the soup read before, or the file the core's importer reads first.
@@ -70,16 +72,17 @@ enum JobInput {
 impl JobInput {
     /// Imports (if needed) and voxelizes (run in the job pool), reporting to `progress`.
     fn run(self, options: &voxel_core::VoxelizeOptions, progress: &Progress) -> JobResult {
-        let first_read = matches!(self, JobInput::File(_));
         let mut imported = match self {
-            JobInput::Read(soup) => Imported { soup, animation: None, animation_error: None, tile: None },
+            JobInput::Read(soup) => {
+                Imported { soup, animation: None, animation_error: None, tile: None, tile_from_voxels: false }
+            }
             JobInput::File(path) => {
                 progress.enter(Stage::Reading).map_err(|e| e.to_string())?;
                 read(&path)?
             }
         };
         let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
-        if first_read && imported.soup.triangle_count() > TILE_TRIANGLES {
+        if imported.tile_from_voxels {
             imported.tile = Some(surface_mesh(&model));
         }
         Ok((imported, model))
@@ -87,14 +90,21 @@ impl JobInput {
 }
 
 /// Reads a file once: its soup, and its animation when it has clips. A file whose animation data the core
-/// refuses still shows, still (read again without its animations), with the reason kept for the model list.
+/// refuses still shows, still (its bytes imported again without their animations), with the reason kept for the
+/// model list.
 fn read(path: &std::path::Path) -> Result<Imported, String> {
-    let (soup, animation, animation_error) = match voxel_core::load_animated_file(path) {
+    let regular = std::fs::metadata(path).is_ok_and(|m| m.is_file());
+    let bytes = voxel_core::read_file(path).map_err(|e| e.to_string())?;
+    let (soup, animation, animation_error) = match voxel_core::load_animated_slice(&bytes, path.parent()) {
         Ok(model) if model.clips().is_empty() => (model.into_rest_soup(), None, None),
         Ok(model) => (model.rest_soup().clone(), Some(model), None),
-        Err(e) => (voxel_core::load_file(path).map_err(|e| e.to_string())?, None, Some(e.to_string())),
+        Err(e) => {
+            let soup = voxel_core::load_slice(&bytes, path.parent()).map_err(|e| e.to_string())?;
+            (soup, None, Some(e.to_string()))
+        }
     };
-    Ok(Imported { soup: Arc::new(soup), animation, animation_error, tile: None })
+    let tile_from_voxels = !regular || soup.triangle_count() > TILE_TRIANGLES;
+    Ok(Imported { soup: Arc::new(soup), animation, animation_error, tile: None, tile_from_voxels })
 }
 
 /// Starts a new generation when voxelization settings change.

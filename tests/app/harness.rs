@@ -53,13 +53,36 @@ pub fn shipped(name: &str) -> std::path::PathBuf {
     voxel_art::assets::asset_root().join("models").join(name)
 }
 
-/// Writes bytes to a fresh temp file and returns its path.
-pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+/// This test process's temp folder.
+fn temp_dir() -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("voxel-art-app-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    dir
+}
+
+/// Writes bytes to a fresh temp file and returns its path.
+pub fn temp_file(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let path = temp_dir().join(name);
     std::fs::write(&path, bytes).unwrap();
     path
+}
+
+/// A named pipe (a fresh temp path) that gives `bytes` to its reader only once the returned sender is dropped:
+/// until then a job reading it is still reading, however fast the machine.
+pub fn held_file(name: &str, bytes: Vec<u8>) -> (std::path::PathBuf, std::sync::mpsc::Sender<()>) {
+    let path = temp_dir().join(name);
+    let _ = std::fs::remove_file(&path);
+    let made = std::process::Command::new("mkfifo").arg(&path).status().expect("mkfifo runs");
+    assert!(made.success(), "mkfifo {}", path.display());
+    let (release, released) = std::sync::mpsc::channel::<()>();
+    let pipe = path.clone();
+    std::thread::spawn(move || {
+        // Returns once the sender is gone (dropped, or the test panicked); opening the pipe then waits for its
+        // reader.
+        let _ = released.recv();
+        let _ = std::fs::write(pipe, bytes);
+    });
+    (path, release)
 }
 
 /// The voxelizer options whose output the app shows now: its settings in its current style, and its colour

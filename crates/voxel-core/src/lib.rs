@@ -83,7 +83,7 @@ mod test_models;
 pub use anim::{AnimatedModel, Bounds, ClipInfo};
 pub use error::{Result, VoxelError};
 pub use grid::{BitGrid, GridSize, GridSpec, GridTriangles};
-pub use import::{load_animated_file, load_animated_slice, load_file, load_slice};
+pub use import::{load_animated_file, load_animated_slice, load_file, load_slice, read_file};
 pub use model::{Voxel, VoxelModel, VoxelStats};
 pub use options::{FillMode, Method, ShellMode, VoxelizeOptions};
 pub use progress::{Progress, Stage};

@@ -25,8 +25,7 @@ use crate::error::{Result, VoxelError};
 
 /// Imports a .glb or .gltf file with its animations (see [`load_animated_slice`]).
 pub fn load_animated_file(path: &Path) -> Result<AnimatedModel> {
-    let bytes = std::fs::read(path).map_err(|source| VoxelError::Io { path: path.to_owned(), source })?;
-    load_animated_slice(&bytes, path.parent())
+    load_animated_slice(&super::read_file(path)?, path.parent())
 }
 
 /// Imports glTF/GLB bytes with their animations: the static soup plus, when the file has animations, its

@@ -28,8 +28,7 @@ pub use validate::MAX_TRIANGLES;
 
 /// Imports a .glb or .gltf file (external buffers and images resolved next to it).
 pub fn load_file(path: &Path) -> Result<TriangleSoup> {
-    let bytes = read_file(path).map_err(|source| VoxelError::Io { path: path.to_owned(), source })?;
-    load_slice(&bytes, path.parent())
+    load_slice(&read_file(path)?, path.parent())
 }
 
 /// How many bytes of a file one thread reads at a time.
@@ -37,8 +36,12 @@ const READ_CHUNK: usize = 8 << 20;
 
 /// The bytes of the file at `path`. A regular file is read in chunks on the rayon threads (its length when
 /// opened, each chunk through its own handle): a big file's pages are faulted in and copied on every core at
-/// once.
-fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
+/// once. Anything else (a pipe, `/dev/stdin`) is read once, to its end.
+pub fn read_file(path: &Path) -> Result<Vec<u8>> {
+    read_chunks(path).map_err(|source| VoxelError::Io { path: path.to_owned(), source })
+}
+
+fn read_chunks(path: &Path) -> std::io::Result<Vec<u8>> {
     let metadata = std::fs::metadata(path)?;
     if !metadata.is_file() {
         return std::fs::read(path);
