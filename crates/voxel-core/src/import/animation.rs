@@ -25,7 +25,7 @@ use crate::error::{Result, VoxelError};
 
 /// Imports a .glb or .gltf file with its animations (see [`load_animated_slice`]).
 pub fn load_animated_file(path: &Path) -> Result<AnimatedModel> {
-    load_animated_slice(&super::read_file(path)?, path.parent())
+    load_animated_slice(&super::read::read_file(path)?, path.parent())
 }
 
 /// Imports glTF/GLB bytes with their animations: the static soup plus, when the file has animations, its
