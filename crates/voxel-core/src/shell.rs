@@ -13,6 +13,7 @@ use crate::progress::Progress;
 use crate::radix::{self, Segments};
 
 mod cells;
+pub(crate) mod distance;
 pub(crate) mod octree;
 use cells::CellTester;
 

@@ -1,0 +1,211 @@
+//! The nearest shell cell to every cell of the grid at once: an exact Euclidean distance transform of the
+//! shell's cells (the lower envelope of parabolas of Felzenszwalb and Huttenlocher, along z, then y, then x),
+//! ties to the lower index as [`ShellOctree::nearest`](super::octree::ShellOctree::nearest) breaks them. It
+//! takes time linear in the grid's cells and 12 bytes a cell while it runs, so it pays where many cells far
+//! from the surface each need their nearest shell cell (an open sheet's filled slab) and an octree walk a
+//! cell would cost more.
+//!
+//! Why the passes give the lowest index among tied cells: the squared distance is a sum over the axes, so its
+//! minimum over shell cells `(x', y', z')` is a minimum over `x'` of `(x - x')²` plus the minimum over `y'` of
+//! `(y - y')²` plus the minimum over `z'` of `(z - z')²`. Each pass keeps, among positions tied along its axis,
+//! the lowest; an index orders cells by x, then y, then z, so that is the lowest index among tied cells.
+
+use rayon::prelude::*;
+
+use super::Shell;
+use crate::grid::GridSpec;
+
+/// No shell cell (along a line, or in the whole grid).
+const NONE: u32 = u32::MAX;
+
+/// The nearest shell cell of every cell.
+pub(crate) struct NearestMap {
+    dims: [u32; 3],
+    /// The linear index of each cell's nearest shell cell, by line along x: `(y·nz + z)·nx + x`.
+    nearest: Vec<u32>,
+}
+
+impl NearestMap {
+    /// The nearest shell cell of every cell of `spec`'s grid.
+    pub fn new(spec: &GridSpec, shell: &Shell) -> Self {
+        let [nx, ny, nz] = spec.dims.map(|d| d as usize);
+        // `distance[i]`: the squared distance from cell i to `site[i]`, the nearest shell cell found so far.
+        let mut distance = vec![NONE; nx * ny * nz];
+        let mut site = vec![NONE; nx * ny * nz];
+        // Along z: a row's shell cells, at distance 0.
+        distance.par_chunks_mut(nz).zip(site.par_chunks_mut(nz)).enumerate().for_each_init(
+            Scratch::default,
+            |scratch, (row, (distance, site))| {
+                let first = (row * nz) as u32;
+                let lo = shell.cells.partition_point(|&c| c < first);
+                let hi = lo + shell.cells[lo..].partition_point(|&c| c < first + nz as u32);
+                if lo == hi {
+                    return;
+                }
+                scratch.load(
+                    nz,
+                    |z| if shell.cells[lo..hi].binary_search(&(first + z as u32)).is_ok() { 0 } else { NONE },
+                    |z| first + z as u32,
+                );
+                scratch.store(distance, site, 1);
+            },
+        );
+        // Along y, in each slab of constant x.
+        distance.par_chunks_mut(ny * nz).zip(site.par_chunks_mut(ny * nz)).for_each_init(
+            Scratch::default,
+            |scratch, (distance, site)| {
+                for z in 0..nz {
+                    scratch.load(ny, |y| distance[y * nz + z], |y| site[y * nz + z]);
+                    scratch.store(&mut distance[z..], &mut site[z..], nz);
+                }
+            },
+        );
+        // Along x, into lines along x.
+        let mut nearest = vec![NONE; nx * ny * nz];
+        let (distance, site) = (&distance, &site);
+        nearest.par_chunks_mut(nz * nx).enumerate().for_each_init(Scratch::default, |scratch, (y, lines)| {
+            for (z, line) in lines.chunks_mut(nx).enumerate() {
+                let at = |x: usize| (x * ny + y) * nz + z;
+                scratch.load(nx, |x| distance[at(x)], |x| site[at(x)]);
+                for (x, out) in line.iter_mut().enumerate() {
+                    *out = scratch.nearest_site(x);
+                }
+            }
+        });
+        Self { dims: spec.dims, nearest }
+    }
+
+    /// The linear index of the shell cell whose centre is nearest to `cell`'s (ties: the lower index), or
+    /// `None` for an empty shell.
+    pub fn nearest(&self, cell: [u32; 3]) -> Option<u32> {
+        let [nx, _, nz] = self.dims.map(|d| d as usize);
+        let [x, y, z] = cell.map(|c| c as usize);
+        Some(self.nearest[(y * nz + z) * nx + x]).filter(|&s| s != NONE)
+    }
+}
+
+/// One parabola of a lower envelope: `(x - at)² + base`, lowest from `from` on (a fraction `num / den`, `den`
+/// positive; `None`: from the line's start).
+#[derive(Clone, Copy)]
+struct Parabola {
+    at: i64,
+    base: i64,
+    from: Option<(i64, i64)>,
+}
+
+/// One line's values and their lower envelope, reused from line to line.
+#[derive(Default)]
+struct Scratch {
+    /// Per position: the squared distance to its nearest shell cell so far, and that cell.
+    values: Vec<(u32, u32)>,
+    envelope: Vec<Parabola>,
+    /// The envelope's parabola nearest each position (evaluated by [`Scratch::store`]).
+    cursor: usize,
+}
+
+impl Scratch {
+    /// Loads a line of `n` positions (`distance(p)`, `site(p)`; [`NONE`]: no shell cell yet) and builds the
+    /// lower envelope of the parabolas `(x - p)² + distance(p)`, a later parabola replacing an earlier one only
+    /// where it is strictly lower.
+    fn load(&mut self, n: usize, distance: impl Fn(usize) -> u32, site: impl Fn(usize) -> u32) {
+        self.values.clear();
+        self.values.extend((0..n).map(|p| (distance(p), site(p))));
+        self.envelope.clear();
+        self.cursor = 0;
+        for (q, &(d, _)) in self.values.iter().enumerate() {
+            if d == NONE {
+                continue;
+            }
+            let (q, base) = (q as i64, i64::from(d));
+            let from = loop {
+                let Some(top) = self.envelope.last() else { break None };
+                // The new parabola is strictly lower than the top one right of num / den.
+                let (num, den) = (base + q * q - top.base - top.at * top.at, 2 * (q - top.at));
+                match top.from {
+                    // The top one is lowest nowhere (at its start it ties the one before, which is nearer).
+                    Some((a, b)) if num * b <= a * den => {
+                        self.envelope.pop();
+                    }
+                    _ => break Some((num, den)),
+                }
+            };
+            self.envelope.push(Parabola { at: q, base, from });
+        }
+    }
+
+    /// The site of the lowest parabola at `x` (ties: the nearer the line's start), for `x` ascending from 0
+    /// after each [`Scratch::load`].
+    fn nearest_site(&mut self, x: usize) -> u32 {
+        let Some(_) = self.envelope.first() else { return NONE };
+        let x = x as i64;
+        while let Some(Parabola { from: Some((num, den)), .. }) = self.envelope.get(self.cursor + 1) {
+            if *num >= x * den {
+                break;
+            }
+            self.cursor += 1;
+        }
+        self.values[self.envelope[self.cursor].at as usize].1
+    }
+
+    /// Writes each position's nearest shell cell and its squared distance into `distance` and `site`, one
+    /// position every `step` entries.
+    fn store(&mut self, distance: &mut [u32], site: &mut [u32], step: usize) {
+        for p in 0..self.values.len() {
+            let s = self.nearest_site(p);
+            if s == NONE {
+                continue;
+            }
+            let parabola = self.envelope[self.cursor];
+            let d = p as i64 - parabola.at;
+            distance[p * step] = (d * d + parabola.base) as u32;
+            site[p * step] = s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::octree::ShellOctree;
+    use super::*;
+    use crate::grid::GridSize;
+    use crate::shapes::{torus, uv_sphere};
+    use crate::soup::TriangleSoup;
+
+    /// The nearest shell cell of `cell` by measuring every shell cell (ties: the lower index).
+    fn brute(spec: &GridSpec, shell: &Shell, cell: [u32; 3]) -> Option<u32> {
+        let distance2 = |s: u32| {
+            let c = spec.coords(s as usize);
+            (0..3).map(|k| u64::from(c[k].abs_diff(cell[k])).pow(2)).sum::<u64>()
+        };
+        shell.cells.iter().map(|&s| (distance2(s), s)).min().map(|(_, s)| s)
+    }
+
+    #[test]
+    fn every_cell_gets_the_nearest_shell_cell_with_ties_to_the_lower_index() {
+        let mut soup = TriangleSoup::from_mesh(&torus(2.0, 0.5, 24), [1.0; 4]);
+        soup.add_mesh(&crate::shapes::cuboid([2.5, 2.5, -0.5], [3.0, 3.0, 0.5]), [1.0; 4], "box");
+        // Uneven sides: the passes' strides differ on every axis.
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(23), 1.3, 1 << 26).unwrap();
+        assert!(spec.dims[0] != spec.dims[1] && spec.dims[1] != spec.dims[2], "{:?}", spec.dims);
+        let tris = spec.grid_triangles(&soup);
+        let shell = super::super::shell(&spec, &tris, &crate::progress::Progress::new());
+        let map = NearestMap::new(&spec, &shell);
+        let octree = ShellOctree::new(&spec, &shell);
+        for i in 0..spec.cell_count() {
+            let cell = spec.coords(i);
+            let nearest = map.nearest(cell);
+            assert_eq!(nearest, brute(&spec, &shell, cell), "{cell:?}");
+            assert_eq!(nearest, octree.nearest(&spec, cell, None), "{cell:?}");
+        }
+    }
+
+    #[test]
+    fn a_lone_shell_cell_is_everyones_nearest_and_no_shell_leaves_none() {
+        let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 4), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(7), 1.0, 1 << 26).unwrap();
+        let lone = Shell { cells: vec![spec.index(3, 1, 5) as u32], ..Shell::default() };
+        let map = NearestMap::new(&spec, &lone);
+        assert!((0..spec.cell_count()).all(|i| map.nearest(spec.coords(i)) == Some(lone.cells[0])));
+        assert_eq!(NearestMap::new(&spec, &Shell::default()).nearest([1, 2, 3]), None);
+    }
+}
