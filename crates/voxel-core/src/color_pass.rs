@@ -14,7 +14,7 @@ use crate::geom::{beyond, box_distance2, closest_point_barycentric, point_at};
 use crate::grid::{AscendingCoords, GridSpec, GridTriangles};
 use crate::progress::Progress;
 use crate::shell::Shell;
-use crate::shell::distance::NearestMap;
+use crate::shell::distance::nearest_shell_cells;
 use crate::shell::octree::ShellOctree;
 use crate::soup::TriangleSoup;
 
@@ -27,16 +27,13 @@ const CELLS_PER_TASK: usize = 1024;
 /// Far cells handed to one task of [`nearest_far`].
 const FAR_PER_TASK: usize = 64;
 
-/// Up to this many grid cells per far cell, [`nearest_far`] transforms the whole grid ([`NearestMap`], about
+/// Up to this many grid cells per far cell, [`nearest_far`] transforms the grid ([`nearest_shell_cells`], about
 /// 12 ns a cell) rather than walking the octree once a far cell (about 3.5 µs for a cell a few dozen cells below
 /// an open sheet).
 const GRID_CELLS_PER_FAR_CELL: usize = 256;
 
-/// Where [`nearest_far`] finds each far cell's nearest shell cell.
-enum Lookup {
-    Octree(ShellOctree),
-    Map(NearestMap),
-}
+/// The largest grid [`nearest_far`] transforms: 2²⁴ cells, 134 MB while it runs (a cube at R=256).
+const TRANSFORM_CELLS: usize = 1 << 24;
 
 /// The colour of a cell that no triangle can colour (every triangle has zero area), and its part.
 const NO_COLOR: ([u8; 4], u32) = ([255; 4], 0);
@@ -228,32 +225,36 @@ pub(crate) fn surface_colors(
 
 /// For each of `cells`, the nearest triangle at the centre of the nearest shell cell and the barycentric
 /// weights of its closest point there (see [`surface_colors`]). The nearest shell cells come from a walk of the
-/// shell's octree a cell, or, when there are many such cells for the grid's size ([`GRID_CELLS_PER_FAR_CELL`]),
-/// from the whole grid's distance transform: the same cells.
+/// shell's octree a cell, or, when there are many such cells for the grid's size ([`GRID_CELLS_PER_FAR_CELL`]) and
+/// the grid is not too large for it ([`TRANSFORM_CELLS`]), from a distance transform of the grid: the same cells.
 fn nearest_far(spec: &GridSpec, tris: &GridTriangles, shell: &Shell, cells: &[u32]) -> Vec<Option<(usize, [f64; 3])>> {
-    let lookup = if spec.cell_count() <= cells.len().saturating_mul(GRID_CELLS_PER_FAR_CELL) {
-        Lookup::Map(NearestMap::new(spec, shell))
+    let grid = spec.cell_count();
+    let sources: Vec<Option<u32>> = if grid <= TRANSFORM_CELLS && grid <= cells.len() * GRID_CELLS_PER_FAR_CELL {
+        nearest_shell_cells(spec, shell, cells)
     } else {
-        Lookup::Octree(ShellOctree::new(spec, shell))
-    };
-    let lookup = &lookup;
-    cells
-        .par_chunks(FAR_PER_TASK)
-        .flat_map_iter(|chunk| {
-            // Each octree walk starts from the nearest shell cell of the cell before it: a far cell's
-            // neighbour's is close to its own, and a close first guess prunes most of the walk.
-            let mut guess = None;
-            chunk.iter().map(move |&i| {
-                let cell = spec.coords(i as usize);
-                let source = match lookup {
-                    Lookup::Map(map) => map.nearest(cell),
-                    Lookup::Octree(octree) => octree.nearest(spec, cell, guess),
-                }?;
-                guess = Some(source);
-                let k = shell.cells.binary_search(&source).expect("the octree holds shell cells");
-                let p = centre(spec.coords(source as usize));
-                nearest_among(tris, p, shell.triangles_at(k).iter().map(|&t| t as usize))
+        let octree = ShellOctree::new(spec, shell);
+        let octree = &octree;
+        cells
+            .par_chunks(FAR_PER_TASK)
+            .flat_map_iter(|chunk| {
+                // Each walk starts from the nearest shell cell of the cell before it: a far cell's neighbour's is
+                // close to its own, and a close first guess prunes most of the walk.
+                let mut guess = None;
+                chunk.iter().map(move |&i| {
+                    let source = octree.nearest(spec, spec.coords(i as usize), guess);
+                    guess = source.or(guess);
+                    source
+                })
             })
+            .collect()
+    };
+    sources
+        .into_par_iter()
+        .map(|source| {
+            let source = source?;
+            let k = shell.cells.binary_search(&source).expect("the nearest shell cell is a shell cell");
+            let p = centre(spec.coords(source as usize));
+            nearest_among(tris, p, shell.triangles_at(k).iter().map(|&t| t as usize))
         })
         .collect()
 }

@@ -1,9 +1,9 @@
-//! The nearest shell cell to every cell of the grid at once: an exact Euclidean distance transform of the
-//! shell's cells (the lower envelope of parabolas of Felzenszwalb and Huttenlocher, along z, then y, then x),
-//! ties to the lower index as [`ShellOctree::nearest`](super::octree::ShellOctree::nearest) breaks them. It
-//! takes time linear in the grid's cells and 12 bytes a cell while it runs, so it pays where many cells far
-//! from the surface each need their nearest shell cell (an open sheet's filled slab) and an octree walk a
-//! cell would cost more.
+//! The nearest shell cell to many cells at once: an exact Euclidean distance transform of the shell's cells
+//! (the lower envelope of parabolas of Felzenszwalb and Huttenlocher, along z, then y over the whole grid, then
+//! x along the lines of the cells asked about), ties to the lower index as
+//! [`ShellOctree::nearest`](super::octree::ShellOctree::nearest) breaks them. It takes time linear in the grid's
+//! cells and 8 bytes a cell while it runs, so it pays where many cells far from the surface each need their
+//! nearest shell cell (an open sheet's filled slab) and an octree walk a cell would cost more.
 //!
 //! Why the passes give the lowest index among tied cells: the squared distance is a sum over the axes, so its
 //! minimum over shell cells `(x', y', z')` is a minimum over `x'` of `(x - x')²` plus the minimum over `y'` of
@@ -14,74 +14,67 @@ use rayon::prelude::*;
 
 use super::Shell;
 use crate::grid::GridSpec;
+use crate::radix;
 
 /// No shell cell (along a line, or in the whole grid).
 const NONE: u32 = u32::MAX;
 
-/// The nearest shell cell of every cell.
-pub(crate) struct NearestMap {
-    dims: [u32; 3],
-    /// The linear index of each cell's nearest shell cell, by line along x: `(y·nz + z)·nx + x`.
-    nearest: Vec<u32>,
-}
-
-impl NearestMap {
-    /// The nearest shell cell of every cell of `spec`'s grid.
-    pub fn new(spec: &GridSpec, shell: &Shell) -> Self {
-        let [nx, ny, nz] = spec.dims.map(|d| d as usize);
-        // `distance[i]`: the squared distance from cell i to `site[i]`, the nearest shell cell found so far.
-        let mut distance = vec![NONE; nx * ny * nz];
-        let mut site = vec![NONE; nx * ny * nz];
-        // Along z: a row's shell cells, at distance 0.
-        distance.par_chunks_mut(nz).zip(site.par_chunks_mut(nz)).enumerate().for_each_init(
-            Scratch::default,
-            |scratch, (row, (distance, site))| {
-                let first = (row * nz) as u32;
-                let lo = shell.cells.partition_point(|&c| c < first);
-                let hi = lo + shell.cells[lo..].partition_point(|&c| c < first + nz as u32);
-                if lo == hi {
-                    return;
-                }
-                scratch.load(
-                    nz,
-                    |z| if shell.cells[lo..hi].binary_search(&(first + z as u32)).is_ok() { 0 } else { NONE },
-                    |z| first + z as u32,
-                );
-                scratch.store(distance, site, 1);
-            },
-        );
-        // Along y, in each slab of constant x.
-        distance.par_chunks_mut(ny * nz).zip(site.par_chunks_mut(ny * nz)).for_each_init(
-            Scratch::default,
-            |scratch, (distance, site)| {
-                for z in 0..nz {
-                    scratch.load(ny, |y| distance[y * nz + z], |y| site[y * nz + z]);
-                    scratch.store(&mut distance[z..], &mut site[z..], nz);
-                }
-            },
-        );
-        // Along x, into lines along x.
-        let mut nearest = vec![NONE; nx * ny * nz];
-        let (distance, site) = (&distance, &site);
-        nearest.par_chunks_mut(nz * nx).enumerate().for_each_init(Scratch::default, |scratch, (y, lines)| {
-            for (z, line) in lines.chunks_mut(nx).enumerate() {
-                let at = |x: usize| (x * ny + y) * nz + z;
-                scratch.load(nx, |x| distance[at(x)], |x| site[at(x)]);
-                for (x, out) in line.iter_mut().enumerate() {
-                    *out = scratch.nearest_site(x);
-                }
+/// For each of `cells` (linear indices, ascending), the linear index of the shell cell whose centre is nearest
+/// to its centre (ties: the lower index), or `None` for an empty shell.
+pub(crate) fn nearest_shell_cells(spec: &GridSpec, shell: &Shell, cells: &[u32]) -> Vec<Option<u32>> {
+    let [nx, ny, nz] = spec.dims.map(|d| d as usize);
+    // `distance[i]`: the squared distance from cell i to `site[i]`, the nearest shell cell found so far.
+    let mut distance = vec![NONE; nx * ny * nz];
+    let mut site = vec![NONE; nx * ny * nz];
+    // Along z: a row's shell cells, at distance 0.
+    distance.par_chunks_mut(nz).zip(site.par_chunks_mut(nz)).enumerate().for_each_init(
+        Scratch::default,
+        |scratch, (row, (distance, site))| {
+            let first = (row * nz) as u32;
+            let lo = shell.cells.partition_point(|&c| c < first);
+            let own = &shell.cells[lo..lo + shell.cells[lo..].partition_point(|&c| c < first + nz as u32)];
+            if own.is_empty() {
+                return;
             }
-        });
-        Self { dims: spec.dims, nearest }
+            let at = |z: usize| first + z as u32;
+            scratch.load(nz, |z| if own.binary_search(&at(z)).is_ok() { 0 } else { NONE }, at);
+            scratch.store(distance, site, 1);
+        },
+    );
+    // Along y, in each slab of constant x.
+    distance.par_chunks_mut(ny * nz).zip(site.par_chunks_mut(ny * nz)).for_each_init(
+        Scratch::default,
+        |scratch, (distance, site)| {
+            for z in 0..nz {
+                scratch.load(ny, |y| distance[y * nz + z], |y| site[y * nz + z]);
+                scratch.store(&mut distance[z..], &mut site[z..], nz);
+            }
+        },
+    );
+    // Along x, on the lines of `cells`: the cells in the order of their lines (y, z), along each line by x.
+    let line_of = |&(i, _): &(u32, u32)| i % (ny * nz) as u32;
+    let by_line = radix::sort_by_key(
+        cells.iter().enumerate().map(|(n, &i)| (i, n as u32)).collect(),
+        radix::bits_for(ny * nz),
+        line_of,
+    );
+    let lines: Vec<&[(u32, u32)]> = by_line.chunk_by(|a, b| line_of(a) == line_of(b)).collect();
+    let (distance, site) = (&distance, &site);
+    let found: Vec<(u32, u32)> = lines
+        .par_iter()
+        .flat_map_iter(|line| {
+            let mut scratch = Scratch::default();
+            let start = line_of(&line[0]) as usize;
+            let at = |x: usize| x * ny * nz + start;
+            scratch.load(nx, |x| distance[at(x)], |x| site[at(x)]);
+            line.iter().map(move |&(i, n)| (n, scratch.nearest_site(i as usize / (ny * nz))))
+        })
+        .collect();
+    let mut nearest = vec![None; cells.len()];
+    for (n, s) in found {
+        nearest[n as usize] = Some(s).filter(|&s| s != NONE);
     }
-
-    /// The linear index of the shell cell whose centre is nearest to `cell`'s (ties: the lower index), or
-    /// `None` for an empty shell.
-    pub fn nearest(&self, cell: [u32; 3]) -> Option<u32> {
-        let [nx, _, nz] = self.dims.map(|d| d as usize);
-        let [x, y, z] = cell.map(|c| c as usize);
-        Some(self.nearest[(y * nz + z) * nx + x]).filter(|&s| s != NONE)
-    }
+    nearest
 }
 
 /// One parabola of a lower envelope: `(x - at)² + base`, lowest from `from` on (a fraction `num / den`, `den`
@@ -99,7 +92,7 @@ struct Scratch {
     /// Per position: the squared distance to its nearest shell cell so far, and that cell.
     values: Vec<(u32, u32)>,
     envelope: Vec<Parabola>,
-    /// The envelope's parabola nearest each position (evaluated by [`Scratch::store`]).
+    /// The envelope's parabola lowest at the last position [`Scratch::nearest_site`] was asked about.
     cursor: usize,
 }
 
@@ -133,8 +126,8 @@ impl Scratch {
         }
     }
 
-    /// The site of the lowest parabola at `x` (ties: the nearer the line's start), for `x` ascending from 0
-    /// after each [`Scratch::load`].
+    /// The site of the lowest parabola at `x` (ties: the nearer the line's start); after each
+    /// [`Scratch::load`], asked about ascending positions.
     fn nearest_site(&mut self, x: usize) -> u32 {
         let Some(_) = self.envelope.first() else { return NONE };
         let x = x as i64;
@@ -189,13 +182,17 @@ mod tests {
         assert!(spec.dims[0] != spec.dims[1] && spec.dims[1] != spec.dims[2], "{:?}", spec.dims);
         let tris = spec.grid_triangles(&soup);
         let shell = super::super::shell(&spec, &tris, &crate::progress::Progress::new());
-        let map = NearestMap::new(&spec, &shell);
         let octree = ShellOctree::new(&spec, &shell);
-        for i in 0..spec.cell_count() {
-            let cell = spec.coords(i);
-            let nearest = map.nearest(cell);
-            assert_eq!(nearest, brute(&spec, &shell, cell), "{cell:?}");
-            assert_eq!(nearest, octree.nearest(&spec, cell, None), "{cell:?}");
+        let every: Vec<u32> = (0..spec.cell_count() as u32).collect();
+        let some: Vec<u32> = every.iter().copied().filter(|i| i % 7 < 2).collect();
+        for cells in [every, some] {
+            let nearest = nearest_shell_cells(&spec, &shell, &cells);
+            assert_eq!(nearest.len(), cells.len());
+            for (&i, &nearest) in cells.iter().zip(&nearest) {
+                let cell = spec.coords(i as usize);
+                assert_eq!(nearest, brute(&spec, &shell, cell), "{cell:?}");
+                assert_eq!(nearest, octree.nearest(&spec, cell, None), "{cell:?}");
+            }
         }
     }
 
@@ -204,8 +201,8 @@ mod tests {
         let soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 4), [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(7), 1.0, 1 << 26).unwrap();
         let lone = Shell { cells: vec![spec.index(3, 1, 5) as u32], ..Shell::default() };
-        let map = NearestMap::new(&spec, &lone);
-        assert!((0..spec.cell_count()).all(|i| map.nearest(spec.coords(i)) == Some(lone.cells[0])));
-        assert_eq!(NearestMap::new(&spec, &Shell::default()).nearest([1, 2, 3]), None);
+        let every: Vec<u32> = (0..spec.cell_count() as u32).collect();
+        assert!(nearest_shell_cells(&spec, &lone, &every).iter().all(|&s| s == Some(lone.cells[0])));
+        assert!(nearest_shell_cells(&spec, &Shell::default(), &every[..5]).iter().all(Option::is_none));
     }
 }
