@@ -23,9 +23,11 @@ const NONE: u32 = u32::MAX;
 /// to its centre (ties: the lower index), or `None` for an empty shell.
 pub(crate) fn nearest_shell_cells(spec: &GridSpec, shell: &Shell, cells: &[u32]) -> Vec<Option<u32>> {
     let [nx, ny, nz] = spec.dims.map(|d| d as usize);
-    // `distance[i]`: the squared distance from cell i to `site[i]`, the nearest shell cell found so far.
-    let mut distance = vec![NONE; nx * ny * nz];
-    let mut site = vec![NONE; nx * ny * nz];
+    // `distance[i]`: the squared distance from cell i to `site[i]`, the nearest shell cell found so far
+    // ([`NONE`]: none yet; `site[i]` is then left as it is). Allocated as zeros, which the system maps on first
+    // write: the z pass writes every distance, on every thread.
+    let mut distance = vec![0; nx * ny * nz];
+    let mut site = vec![0; nx * ny * nz];
     // Along z: a row's shell cells, at distance 0.
     distance.par_chunks_mut(nz).zip(site.par_chunks_mut(nz)).enumerate().for_each_init(
         Scratch::default,
@@ -34,6 +36,7 @@ pub(crate) fn nearest_shell_cells(spec: &GridSpec, shell: &Shell, cells: &[u32])
             let lo = shell.cells.partition_point(|&c| c < first);
             let own = &shell.cells[lo..lo + shell.cells[lo..].partition_point(|&c| c < first + nz as u32)];
             if own.is_empty() {
+                distance.fill(NONE);
                 return;
             }
             let at = |z: usize| first + z as u32;
