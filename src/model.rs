@@ -180,8 +180,8 @@ impl ModelLibrary {
         self.entries.len() - 1
     }
 
-    /// Adds a file (a named pipe too) or every model in a folder; returns the index of the first added. A path that is
-    /// neither becomes a failed entry, so the panel shows why.
+    /// Adds a file (a named pipe too) or every model in a folder; returns the index of the first added. A path
+    /// that is neither becomes a failed entry, so the panel shows why.
     pub fn add_path(&mut self, path: &Path) -> Option<usize> {
         let files =
             if path.is_dir() { voxel_core::files::expand_inputs(&[path.to_owned()]) } else { vec![path.to_owned()] };
