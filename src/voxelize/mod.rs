@@ -59,8 +59,6 @@ struct Imported {
     animation_error: Option<String>,
     /// For a file of more than [`TILE_TRIANGLES`] triangles or one read once, read now: its preview tile.
     tile: Option<Mesh>,
-    /// Whether the file's voxels make its tile (see [`Imported::tile`]): it is big, or it cannot be read again.
-    tile_from_voxels: bool,
 }
 
 /// What a job starts from: the soup read before, or the file the core's importer reads first.
@@ -72,17 +70,19 @@ enum JobInput {
 impl JobInput {
     /// Imports (if needed) and voxelizes (run in the job pool), reporting to `progress`.
     fn run(self, options: &voxel_core::VoxelizeOptions, progress: &Progress) -> JobResult {
-        let mut imported = match self {
-            JobInput::Read(soup) => {
-                Imported { soup, animation: None, animation_error: None, tile: None, tile_from_voxels: false }
-            }
+        let (mut imported, tile_from_voxels) = match self {
+            JobInput::Read(soup) => (Imported { soup, animation: None, animation_error: None, tile: None }, false),
             JobInput::File(path) => {
                 progress.enter(Stage::Reading).map_err(|e| e.to_string())?;
-                read(&path)?
+                // Bevy's glTF loader would read the file again: not a big one, nor one that can be read only once.
+                let regular = std::fs::metadata(&path).is_ok_and(|m| m.is_file());
+                let imported = read(&path)?;
+                let big = imported.soup.triangle_count() > TILE_TRIANGLES;
+                (imported, big || !regular)
             }
         };
         let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
-        if imported.tile_from_voxels {
+        if tile_from_voxels {
             imported.tile = Some(surface_mesh(&model));
         }
         Ok((imported, model))
@@ -93,7 +93,6 @@ impl JobInput {
 /// refuses still shows, still (its bytes imported again without their animations), with the reason kept for the
 /// model list.
 fn read(path: &std::path::Path) -> Result<Imported, String> {
-    let regular = std::fs::metadata(path).is_ok_and(|m| m.is_file());
     let bytes = voxel_core::read_file(path).map_err(|e| e.to_string())?;
     let (soup, animation, animation_error) = match voxel_core::load_animated_slice(&bytes, path.parent()) {
         Ok(model) if model.clips().is_empty() => (model.into_rest_soup(), None, None),
@@ -103,8 +102,7 @@ fn read(path: &std::path::Path) -> Result<Imported, String> {
             (soup, None, Some(e.to_string()))
         }
     };
-    let tile_from_voxels = !regular || soup.triangle_count() > TILE_TRIANGLES;
-    Ok(Imported { soup: Arc::new(soup), animation, animation_error, tile: None, tile_from_voxels })
+    Ok(Imported { soup: Arc::new(soup), animation, animation_error, tile: None })
 }
 
 /// Starts a new generation when voxelization settings change.

@@ -132,7 +132,9 @@ impl Scratch {
     /// The site of the lowest parabola at `x` (ties: the nearer the line's start); after each
     /// [`Scratch::load`], asked about ascending positions.
     fn nearest_site(&mut self, x: usize) -> u32 {
-        let Some(_) = self.envelope.first() else { return NONE };
+        if self.envelope.is_empty() {
+            return NONE;
+        }
         let x = x as i64;
         while let Some(Parabola { from: Some((num, den)), .. }) = self.envelope.get(self.cursor + 1) {
             if *num >= x * den {
