@@ -6,10 +6,11 @@
 //!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
 //!   spread their work over every core;
-//! - voxelization jobs run in a pool of their own whose threads run at a low priority ([`job_pool`]): a big
-//!   model's seconds of voxelizing take only the time the frame leaves, and a second job runs beside it. A job
-//!   is handed to that pool, not run from an async-compute thread ([`spawn_job`]): the async-compute pool has
-//!   one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited for by frames.
+//! - voxelization jobs run in pools of their own whose threads run at a low priority ([`job_queue`]): a big
+//!   model's seconds of voxelizing take only the time the frame leaves, and a second job runs beside it in a
+//!   second pool. A job is handed to those pools, not run from an async-compute thread ([`spawn_job`]): the
+//!   async-compute pool has one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited
+//!   for by frames.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -28,19 +29,42 @@ pub fn task_pools() -> TaskPoolPlugin {
     TaskPoolPlugin { task_pool_options: options }
 }
 
-/// The rayon pool voxelization jobs run in: a thread per core, each at a low priority ([`JOB_NICENESS`]), so the
-/// frame's threads (the main world, rendering, rayon's global pool that frame systems use) always run first and a
-/// job takes only the time they leave. With more than one thread, a second job (another dropped file, a new
-/// setting) starts while a long one runs instead of queuing behind it.
-pub fn job_pool() -> &'static rayon::ThreadPool {
-    static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
-    POOL.get_or_init(|| {
+/// Voxelization jobs that run at once, each in a rayon pool of its own ([`job_queue`]): a second job (another
+/// dropped file, a new setting) starts beside a long one, and a batch (every model after a setting change, the one
+/// on screen first) runs this many at a time in the order it was queued.
+pub const JOB_LANES: usize = 2;
+
+/// A queued job.
+type Job = Box<dyn FnOnce() + Send>;
+
+/// The queue of voxelization jobs, served by [`JOB_LANES`] lanes: a lane is a thread that takes the next job and
+/// runs it in the lane's rayon pool, a thread per core, each at a low priority ([`JOB_NICENESS`]), so the frame's
+/// threads (the main world, rendering, rayon's global pool that frame systems use) always run first and a job takes
+/// only the time they leave. One pool for all jobs would not do: its threads take a newly queued job only when no
+/// job they have started has work left to split, so a second job would wait for the parallel passes of the first.
+fn job_queue() -> &'static async_channel::Sender<Job> {
+    static QUEUE: std::sync::OnceLock<async_channel::Sender<Job>> = std::sync::OnceLock::new();
+    QUEUE.get_or_init(|| {
+        let (sender, receiver) = async_channel::unbounded::<Job>();
         let threads = bevy::tasks::available_parallelism().max(2);
-        let builder = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("voxelize-{i}"))
-            .start_handler(|_| lower_priority());
-        builder.build().expect("the operating system starts the voxelization threads")
+        for lane in 0..JOB_LANES {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(move |i| format!("voxelize-{lane}-{i}"))
+                .start_handler(|_| lower_priority())
+                .build()
+                .expect("the operating system starts the voxelization threads");
+            let receiver = receiver.clone();
+            std::thread::Builder::new()
+                .name(format!("voxelize-{lane}"))
+                .spawn(move || {
+                    while let Ok(job) = receiver.recv_blocking() {
+                        pool.install(job);
+                    }
+                })
+                .expect("the operating system starts the voxelization threads");
+        }
+        sender
     })
 }
 
@@ -55,14 +79,15 @@ fn lower_priority() {
     let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), JOB_NICENESS);
 }
 
-/// Runs `work` in [`job_pool`]; the returned task (on the async-compute pool) waits for its result without
-/// holding a thread, and yields `None` if the work panicked.
+/// Queues `work` for the next free lane of [`job_queue`]; the returned task (on the async-compute pool) waits for
+/// its result without holding a thread, and yields `None` if the work panicked.
 pub fn spawn_job<T: Send + 'static>(work: impl FnOnce() -> T + Send + 'static) -> Task<Option<T>> {
     let (sender, receiver) = async_channel::bounded(1);
-    job_pool().spawn(move || {
+    // The queue is never closed (its lanes hold its receiver for good).
+    let _ = job_queue().send_blocking(Box::new(move || {
         // The receiver is gone when the job's task was dropped (a stale job): nothing waits for the result.
         let _ = sender.send_blocking(catch_unwind(AssertUnwindSafe(work)));
-    });
+    }));
     AsyncComputeTaskPool::get().spawn(async move { receiver.recv().await.ok()?.ok() })
 }
 
@@ -101,10 +126,18 @@ mod tests {
         assert_eq!(panicked, None, "a panic comes back as None, not into the caller");
     }
 
-    #[cfg(target_os = "linux")]
+    /// The lanes are shared by every test of the process: the checks that fill them run one after another here.
     #[test]
-    fn jobs_run_at_a_low_priority_and_a_second_runs_beside_the_first() {
+    fn jobs_run_in_lanes_at_a_low_priority_a_second_beside_a_busy_first() {
         AsyncComputeTaskPool::get_or_init(TaskPool::default);
+        #[cfg(target_os = "linux")]
+        a_job_runs_at_a_low_priority_and_a_second_beside_a_waiting_first();
+        a_second_job_starts_while_the_first_keeps_its_threads_busy();
+        a_batch_of_jobs_runs_a_lane_at_a_time_each();
+    }
+
+    #[cfg(target_os = "linux")]
+    fn a_job_runs_at_a_low_priority_and_a_second_beside_a_waiting_first() {
         let niceness = || rustix::process::getpriority_process(Some(rustix::thread::gettid())).ok();
         assert_eq!(block_on(spawn_job(niceness)), Some(Some(JOB_NICENESS)));
         // The first job waits for the second: it finishes only if the second starts while it runs.
@@ -113,5 +146,56 @@ mod tests {
         let second = spawn_job(move || sender.send(()).is_ok());
         assert_eq!(block_on(second), Some(true));
         assert_eq!(block_on(first), Some(true), "the second job waited for the first");
+    }
+
+    fn a_second_job_starts_while_the_first_keeps_its_threads_busy() {
+        use rayon::prelude::*;
+        use std::sync::Arc;
+        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::time::{Duration, Instant};
+        let started = Arc::new(AtomicBool::new(false));
+        let seen = Arc::clone(&started);
+        // Parallel work that always has items left to split until the second job has run (or 10 s have passed):
+        // the threads running it never run out of it, as a big model's passes keep them busy.
+        let first = spawn_job(move || {
+            let deadline = Instant::now() + Duration::from_secs(10);
+            let stopped = (0..u64::MAX).into_par_iter().try_for_each(|_| {
+                if seen.load(Ordering::Relaxed) {
+                    return Err(true);
+                }
+                if Instant::now() > deadline {
+                    return Err(false);
+                }
+                std::hint::spin_loop();
+                Ok(())
+            });
+            stopped.err()
+        });
+        // Let the first job take its pool's threads before the second is queued.
+        std::thread::sleep(Duration::from_millis(100));
+        let second = spawn_job(move || started.store(true, Ordering::Relaxed));
+        assert_eq!(block_on(second), Some(()));
+        assert_eq!(block_on(first), Some(Some(true)), "the second job ran only once the first had given up");
+    }
+
+    fn a_batch_of_jobs_runs_a_lane_at_a_time_each() {
+        use std::sync::Arc;
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let (running, most) = (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)));
+        let jobs: Vec<_> = (0..JOB_LANES + 2)
+            .map(|_| {
+                let (running, most) = (Arc::clone(&running), Arc::clone(&most));
+                spawn_job(move || {
+                    let now = running.fetch_add(1, Ordering::SeqCst) + 1;
+                    most.fetch_max(now, Ordering::SeqCst);
+                    std::thread::sleep(std::time::Duration::from_millis(150));
+                    running.fetch_sub(1, Ordering::SeqCst);
+                })
+            })
+            .collect();
+        for job in jobs {
+            assert_eq!(block_on(job), Some(()));
+        }
+        assert_eq!(most.load(Ordering::SeqCst), JOB_LANES, "jobs beyond the lanes wait for a free one");
     }
 }

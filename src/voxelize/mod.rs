@@ -4,8 +4,8 @@
 //! the same read (the `animation` plugin poses it); a static file costs what it did. A settings change
 //! re-voxelizes every model, the one on screen first, and while a setting is dragged ([`SettingDrag`]) only that
 //! one; a stale job is cancelled (the core stops at its next stage) and its result dropped (latest wins). Jobs
-//! run in [`job_pool`](crate::threads::job_pool), whose low-priority threads leave the frame first ([`spawn_job`]), and report their stage to the
-//! model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
+//! run in the lanes of [`spawn_job`], whose low-priority threads leave the frame first, and report their stage to
+//! the model's entry. Once the core has read a file, Bevy's glTF loader is asked for it too, for its preview tile
 //! only; a file of more than [`TILE_TRIANGLES`] triangles, or one that can be read only once (a pipe), is not
 //! read again: its tile shows the surface of its first voxels, meshed on the worker.
 
@@ -120,9 +120,9 @@ fn track_settings(
 }
 
 /// Starts a job for every model whose voxels are missing or stale and that has no current job, the model on
-/// screen first (the job pool has one thread on a 2-core machine: what is spawned first runs first). While a
-/// setting is dragged only the model on screen gets a job; the others wait, marked voxelizing, for the drag to
-/// end.
+/// screen first (jobs take the free lanes in the order they were spawned: [`JOB_LANES`](crate::threads::JOB_LANES)).
+/// While a setting is dragged only the model on screen gets a job; the others wait, marked voxelizing, for the drag
+/// to end.
 fn start_jobs(
     mut commands: Commands,
     mut library: ResMut<ModelLibrary>,
