@@ -66,6 +66,10 @@ impl Shell {
 /// The top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side).
 const SLAB_BITS: u32 = 6;
 
+/// The bits of the fewest cells a slab of [`shell`] covers: a smaller grid has fewer slabs, so that each of its
+/// tasks starts fewer lists (a list's first segment is 512 bytes: at R=128 a model's 24 tasks started 1,536).
+const SLAB_CELL_BITS: u32 = 16;
+
 /// The overlaps below which consecutive slabs of [`shell`] sort together.
 const OVERLAPS_PER_SORT: usize = 1 << 16;
 
@@ -322,11 +326,12 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
     // Each task's overlaps go to lists by the top bits of their cell (a slab of the grid each), so that the
     // slabs sort side by side, each into its own stretch of the output.
     let bits = radix::bits_for(spec.cell_count());
-    let shift = bits.saturating_sub(SLAB_BITS);
+    let shift = bits.saturating_sub(SLAB_BITS).max(SLAB_CELL_BITS).min(bits);
+    let slab_count = 1 << (bits - shift);
     let mut lists: Vec<Vec<Segments<u64>>> = (0..tris.len())
         .into_par_iter()
         .fold(
-            || (0..1 << SLAB_BITS).map(|_| Segments::default()).collect::<Vec<_>>(),
+            || (0..slab_count).map(|_| Segments::default()).collect::<Vec<_>>(),
             |mut slabs, tri| {
                 if !progress.is_cancelled() {
                     overlaps(spec, tris, tri, &mut |p| slabs[(p >> 32 >> shift) as usize].push(p));
@@ -337,7 +342,7 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
         .collect();
     // Per slab, the tasks' lists in the tasks' order: they keep the triangles' order, so sorting by cell alone
     // orders by (cell, triangle), and the sorted triangles are the compressed rows' already.
-    let slabs: Vec<Vec<Vec<u64>>> = (0..1 << SLAB_BITS)
+    let slabs: Vec<Vec<Vec<u64>>> = (0..slab_count)
         .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
         .collect();
     let (mut cells, tris) = sorted_by_cell(slabs, shift);
