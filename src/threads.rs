@@ -29,15 +29,15 @@ pub fn task_pools() -> TaskPoolPlugin {
     TaskPoolPlugin { task_pool_options: options }
 }
 
-/// Voxelization jobs that run at once, each in a rayon pool of its own ([`job_queue`]): a second job (another
-/// dropped file, a new setting) starts beside a long one, and a batch (every model after a setting change, the one
-/// on screen first) runs this many at a time in the order it was queued.
+/// Jobs (voxelizations, the transition's layouts) that run at once, each in a rayon pool of its own
+/// ([`job_queue`]): a second job (another dropped file, a new setting) starts beside a long one, and a batch (every
+/// model after a setting change, the one on screen first) runs this many at a time in the order it was queued.
 pub const JOB_LANES: usize = 2;
 
 /// A queued job.
 type Job = Box<dyn FnOnce() + Send>;
 
-/// The queue of voxelization jobs, served by [`JOB_LANES`] lanes: a lane is a thread that takes the next job and
+/// The queue of jobs, served by [`JOB_LANES`] lanes: a lane is a thread that takes the next job and
 /// runs it in the lane's rayon pool, a thread per core, each at a low priority ([`JOB_NICENESS`]), so the frame's
 /// threads (the main world, rendering, rayon's global pool that frame systems use) always run first and a job takes
 /// only the time they leave. One pool for all jobs would not do: its threads take a newly queued job only when no
