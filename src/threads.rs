@@ -6,7 +6,7 @@
 //!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
 //!   spread their work over every core;
-//! - voxelization jobs run in pools of their own whose threads run at a low priority ([`job_queue`]): a big
+//! - voxelization jobs run in pools of their own whose threads run at a low priority (`job_queue`): a big
 //!   model's seconds of voxelizing take only the time the frame leaves, and a second job runs beside it in a
 //!   second pool. A job is handed to those pools, not run from an async-compute thread ([`spawn_job`]): the
 //!   async-compute pool has one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited
@@ -30,7 +30,7 @@ pub fn task_pools() -> TaskPoolPlugin {
 }
 
 /// Jobs (voxelizations, the transition's layouts) that run at once, each in a rayon pool of its own
-/// ([`job_queue`]): a second job (another dropped file, a new setting) starts beside a long one, and a batch (every
+/// (`job_queue`): a second job (another dropped file, a new setting) starts beside a long one, and a batch (every
 /// model after a setting change, the one on screen first) runs this many at a time in the order it was queued.
 pub const JOB_LANES: usize = 2;
 
@@ -79,7 +79,7 @@ fn lower_priority() {
     let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), JOB_NICENESS);
 }
 
-/// Queues `work` for the next free lane of [`job_queue`]; the returned task (on the async-compute pool) waits for
+/// Queues `work` for the next free lane of `job_queue`; the returned task (on the async-compute pool) waits for
 /// its result without holding a thread, and yields `None` if the work panicked.
 pub fn spawn_job<T: Send + 'static>(work: impl FnOnce() -> T + Send + 'static) -> Task<Option<T>> {
     let (sender, receiver) = async_channel::bounded(1);

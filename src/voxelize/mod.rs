@@ -68,7 +68,7 @@ enum JobInput {
 }
 
 impl JobInput {
-    /// Imports (if needed) and voxelizes (run in the job pool), reporting to `progress`.
+    /// Imports (if needed) and voxelizes (run in a job lane: [`spawn_job`]), reporting to `progress`.
     fn run(self, options: &voxel_core::VoxelizeOptions, progress: &Progress) -> JobResult {
         let (mut imported, tile_from_voxels) = match self {
             JobInput::Read(soup) => (Imported { soup, animation: None, animation_error: None, tile: None }, false),

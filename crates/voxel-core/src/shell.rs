@@ -63,7 +63,8 @@ impl Shell {
     }
 }
 
-/// The top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side).
+/// The most top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side; a small grid
+/// has fewer: [`SLAB_CELL_BITS`]).
 const SLAB_BITS: u32 = 6;
 
 /// The bits of the fewest cells a slab of [`shell`] covers: a smaller grid has fewer slabs, so that each of its
