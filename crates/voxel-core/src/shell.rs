@@ -48,9 +48,15 @@ impl Shell {
                 return false;
             }
             let c = spec.coords(index);
+            // Neighbouring triangles mostly step alike (a cell crossed by a sheet of tiny triangles lists dozens):
+            // a step just found not thin is not looked up again.
+            let mut last = None;
             self.triangles_at(k).iter().any(|&tri| {
                 let t = &tris.get(tri as usize);
                 let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
+                if last.replace(step) == Some(step) {
+                    return false;
+                }
                 [step, step.map(|s| -s)].into_iter().all(|s| !spec.neighbour(c, s).is_some_and(|n| fill.get(n)))
             })
         };

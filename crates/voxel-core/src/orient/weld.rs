@@ -51,14 +51,16 @@ fn table_bits(count: usize) -> u32 {
 }
 
 /// Whether the `count` keys `keys` are all different: first by their hashes alone (keys with different
-/// hashes differ), then, only when two hashes agree, by the keys themselves.
+/// hashes differ), then, only when two hashes agree, by the keys themselves ([`representatives`]).
 pub(crate) fn all_different<K: Key>(count: usize, keys: impl Iterator<Item = K> + Clone) -> bool {
-    hashes_all_different(count, keys.clone().map(|key| key.hash())) || keys_all_different(count, keys)
+    hashes_all_different(count, keys.clone().map(|key| key.hash()))
+        || representatives(count, keys).iter().enumerate().all(|(k, &first)| first as usize == k)
 }
 
 /// Whether the `count` hashes `hashes` are surely all different (false when two are equal, and also when
 /// two differ only in the last bit and one of them is the table's empty mark): an open-addressing table of
-/// the hashes.
+/// the hashes. (One pass over the keys: for keys gathered from several lists, as a grid's positions of a soup's
+/// corners are, that costs more than the table's misses, where [`representatives`] takes two.)
 fn hashes_all_different(count: usize, hashes: impl Iterator<Item = u64>) -> bool {
     // Not a repeated byte, as `EMPTY`.
     const UNUSED: u64 = 0x5555_5555_5555_5554;
@@ -82,19 +84,67 @@ fn hashes_all_different(count: usize, hashes: impl Iterator<Item = u64>) -> bool
     true
 }
 
-/// Whether the `count` keys `keys` are all different: welds them (a table of the keys themselves), left at
-/// the first repeat.
-fn keys_all_different<K: Key>(count: usize, keys: impl Iterator<Item = K>) -> bool {
-    let mut table = Table::with_room(count);
-    for (c, key) in keys.enumerate() {
-        match table.find(key) {
-            Ok(_) => return false,
-            Err(slot) => {
-                table.insert(slot, key, c as u32);
+/// Keys per part of [`representatives`] (about): the part's table, 4 bytes a slot, and its keys stay in the core's
+/// L2 cache.
+const KEYS_PER_PART: usize = 1 << 12;
+
+/// The most parts of [`representatives`] (bits).
+const MOST_PART_BITS: u32 = 16;
+
+/// For each of the `count` keys `keys`, the first key equal to it (its position in `keys`). The keys are split
+/// into parts by the top bits of their hashes (two passes over `keys`: counting, then copying each key with its
+/// position into its part's stretch of one list), then each part is welded in a small table: where one table
+/// for all the keys (32 MB for a million) misses the caches at almost every probe, a part's stays in L2 (the
+/// height field's million vertices on a 2-core VM: its soup weld 70 → 51 ms).
+pub(crate) fn representatives<K: Key>(count: usize, keys: impl Iterator<Item = K> + Clone) -> Vec<u32> {
+    let part_bits = crate::radix::bits_for(count / KEYS_PER_PART).min(MOST_PART_BITS);
+    let part = |key: &K| if part_bits == 0 { 0 } else { (key.hash() >> (64 - part_bits)) as usize };
+    let mut start = vec![0u32; (1 << part_bits) + 1];
+    for key in keys.clone() {
+        start[part(&key) + 1] += 1;
+    }
+    for p in 1..start.len() {
+        start[p] += start[p - 1];
+    }
+    let mut next = start.clone();
+    let mut parted = vec![(K::default(), 0u32); count];
+    for (k, key) in keys.enumerate() {
+        let at = &mut next[part(&key)];
+        parted[*at as usize] = (key, k as u32);
+        *at += 1;
+    }
+    let largest = start.windows(2).map(|w| (w[1] - w[0]) as usize).max().unwrap_or(0);
+    let bits = table_bits(largest);
+    // A slot holds the position in `parted` of the first key seen with its hash's slot bits, or EMPTY.
+    let mut slots = vec![EMPTY; 1 << bits];
+    let mask = slots.len() - 1;
+    let mut first = vec![0u32; count];
+    for w in start.windows(2) {
+        let entries = &parted[w[0] as usize..w[1] as usize];
+        for (e, &(key, k)) in entries.iter().enumerate() {
+            // The bits below the part's pick the slot.
+            let mut slot = ((key.hash() << part_bits) >> (64 - bits)) as usize;
+            first[k as usize] = loop {
+                match slots[slot] {
+                    EMPTY => {
+                        slots[slot] = e as u32;
+                        break k;
+                    }
+                    seen if entries[seen as usize].0 == key => break entries[seen as usize].1,
+                    _ => slot = (slot + 1) & mask,
+                }
+            };
+        }
+        // Emptied for the next part: the slots this part filled.
+        for &(key, _) in entries {
+            let mut slot = ((key.hash() << part_bits) >> (64 - bits)) as usize;
+            while slots[slot] != EMPTY {
+                slots[slot] = EMPTY;
+                slot = (slot + 1) & mask;
             }
         }
     }
-    true
+    first
 }
 
 /// Welds corners (`corners`, in order) by their keys (`key`): one pass through an open-addressing table that
@@ -105,12 +155,7 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
     // that. Room for more costs more than the growth: a table beyond the core's L2 cache slows every probe
     // (room for one position per two corners: 4 MiB of slots for the FlightHelmet, its analysis 7.1 ms
     // instead of 4.7).
-    weld_with_room(corners, key, corners.len() / 6)
-}
-
-/// [`weld`] with a table that starts with room for `positions` distinct keys.
-fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: usize) -> Welded {
-    let mut table = Table::with_room(positions);
+    let mut table = Table::with_room(corners.len() / 6);
     let mut id = vec![0; corners.len()];
     for (c, (corner, id)) in corners.iter().zip(&mut id).enumerate() {
         let key = key(corner);
@@ -123,15 +168,14 @@ fn weld_with_room<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K, positions: us
 }
 
 /// [`weld`] of corners read from indexed source vertices (corner `c` at `positions[index[c]]`, bit for bit):
-/// welds the sources, one per vertex rather than one per corner, then numbers each corner's position in order
-/// of first appearance as [`weld`] of the corners would, so the result is the same.
+/// welds the sources, one per vertex rather than one per corner ([`representatives`]), then numbers each corner's
+/// position in order of first appearance as [`weld`] of the corners would, so the result is the same.
 pub(crate) fn weld_indexed<T, K: Key>(positions: &[T], key: impl Fn(&T) -> K, index: &[u32]) -> Welded {
-    // Source vertices are mostly at different positions: room for all of them.
-    let sources = weld_with_room(positions, key, positions.len());
-    let mut renumbered = vec![EMPTY; sources.first.len()];
-    let mut welded = Welded { id: vec![0; index.len()], first: Vec::with_capacity(sources.first.len()) };
+    let first_source = representatives(positions.len(), positions.iter().map(&key));
+    let mut renumbered = vec![EMPTY; positions.len()];
+    let mut welded = Welded { id: vec![0; index.len()], first: Vec::new() };
     for (c, (&source, id)) in index.iter().zip(&mut welded.id).enumerate() {
-        let position = &mut renumbered[sources.id[source as usize] as usize];
+        let position = &mut renumbered[first_source[source as usize] as usize];
         if *position == EMPTY {
             *position = welded.first.len() as u32;
             welded.first.push(c as u32);
@@ -255,5 +299,35 @@ mod tests {
         let near_mark = [Colliding(0x5555_5555_5555_5554, 0), Colliding(0x5555_5555_5555_5555, 0)];
         assert!(all_different(2, near_mark.iter().copied()));
         assert!(hashes_all_different(3, [1u64 << 63, 1 << 62, 3].into_iter()));
+        // Many keys over many parts, each hash shared by four different keys (and every key repeated once).
+        let keys: Vec<Colliding> = (0..40_000u64)
+            .map(|k| k % 20_000)
+            .map(|k| Colliding((k / 4).wrapping_mul(0x9e37_79b9_7f4a_7c15), k))
+            .collect();
+        let first = representatives(keys.len(), keys.iter().copied());
+        assert!(
+            first
+                .iter()
+                .enumerate()
+                .all(|(k, &f)| keys[f as usize] == keys[k] && keys[..f as usize].iter().all(|o| *o != keys[k]))
+        );
+        assert_eq!(first.iter().enumerate().filter(|&(k, &f)| f as usize == k).count(), 20_000);
+    }
+
+    #[test]
+    fn every_key_points_to_the_first_equal_key_across_parts() {
+        // 300,000 positions on a lattice, each drawn about three times, in a scattered order: many parts.
+        let mut random = crate::lcg::Lcg::new(11);
+        let keys: Vec<[u32; 3]> =
+            (0..300_000).map(|_| soup_key([0, 1, 2].map(|_| (random.unit(47.0) as f32).floor() * 0.25))).collect();
+        let first = representatives(keys.len(), keys.iter().copied());
+        let mut seen = std::collections::HashMap::new();
+        for (k, key) in keys.iter().enumerate() {
+            assert_eq!(first[k], *seen.entry(*key).or_insert(k as u32), "key {k}");
+        }
+        assert!((50_000..110_000).contains(&seen.len()), "{}", seen.len());
+        assert!(!all_different(keys.len(), keys.iter().copied()));
+        let distinct: Vec<[u32; 3]> = seen.keys().copied().collect();
+        assert!(all_different(distinct.len(), distinct.iter().copied()));
     }
 }
