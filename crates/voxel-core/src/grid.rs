@@ -76,9 +76,10 @@ impl WorldToGrid {
     }
 }
 
-/// `v` rounded to the nearest multiple of `quantum` (a power of two, so exact).
+/// `v` rounded to the nearest multiple of `quantum` (a power of two, so exact: multiplying by its reciprocal,
+/// also a power of two, is dividing by it, without the division's cost).
 fn snap(v: DVec3, quantum: f64) -> DVec3 {
-    DVec3::from((v / quantum).to_array().map(float::round)) * quantum
+    DVec3::from((v * quantum.recip()).to_array().map(float::round)) * quantum
 }
 
 /// The snapping step for a model whose coordinates reach `reach` cells from the world origin: the f32 noise of
@@ -451,6 +452,19 @@ impl<'a> AscendingCoords<'a> {
 mod tests {
     use super::*;
     use crate::soup::{Material, Vertex};
+
+    #[test]
+    fn snapping_multiplies_by_the_reciprocal_as_dividing_would() {
+        let mut random = crate::lcg::Lcg::new(5);
+        for reach in [0.3, 7.5, 64.0, 1000.0, 2048.0, 1e6] {
+            let quantum = snap_quantum(reach);
+            for _ in 0..10_000 {
+                let v = DVec3::new(random.unit(2.0 * reach), random.unit(reach), random.unit(0.01)) - reach / 2.0;
+                let divided = DVec3::from((v / quantum).to_array().map(f64::round)) * quantum;
+                assert_eq!(snap(v, quantum).to_array().map(f64::to_bits), divided.to_array().map(f64::to_bits), "{v}");
+            }
+        }
+    }
 
     fn unit_cube_corners() -> TriangleSoup {
         let mut soup = TriangleSoup::default();
