@@ -108,22 +108,21 @@ fn round_to_u8(x: f32) -> u8 {
 /// texture, as sRGB RGBA8. COLOR_0 shared by the three corners is taken as it is, so an untextured triangle of
 /// one colour has that colour wherever it is sampled ([`flat_color`]).
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
-    let [a, b, c] = soup.triangle(t);
+    // The corners' colours, and their texture coordinates when there is a texture (not their positions).
+    let corners = soup.triangles()[t].map(|i| i as usize);
+    let [a, b, c] = corners.map(|i| soup.colors()[i]);
     let material = soup.material_of(t);
     let [w0, w1, w2] = w.map(|w| w as f32);
     // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).
     let lerp = |x: f32, y: f32, z: f32| w0 * x + w1 * y + w2 * z;
-    let color = if a.color == b.color && b.color == c.color {
-        a.color
-    } else {
-        std::array::from_fn(|ch| lerp(a.color[ch], b.color[ch], c.color[ch]))
-    };
+    let color = if a == b && b == c { a } else { std::array::from_fn(|ch| lerp(a[ch], b[ch], c[ch])) };
     let mut rgba = [0.0f32; 4];
     for (ch, out) in rgba.iter_mut().enumerate() {
         *out = material.base_color[ch] * color[ch];
     }
     if let Some(binding) = &material.texture {
-        let uv = [lerp(a.uv[0], b.uv[0], c.uv[0]), lerp(a.uv[1], b.uv[1], c.uv[1])];
+        let [a, b, c] = corners.map(|i| soup.uv(i));
+        let uv = [lerp(a[0], b[0], c[0]), lerp(a[1], b[1], c[1])];
         let texel = binding.texture.sample_nearest(uv, binding.wrap);
         for ch in 0..3 {
             rgba[ch] *= srgb_to_linear(texel[ch]);

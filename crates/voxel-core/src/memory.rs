@@ -51,7 +51,7 @@ fn bytes(spec: &GridSpec, tris: &GridTriangles, fill: FillMode, overlaps: f64) -
 /// At least [`estimate`], from the largest extent of any triangle along each axis: every triangle counts as
 /// many overlaps as a triangle of that extent can ([`overlaps_of`] is at most the most cells such an extent's
 /// bounding box spans across an axis, plus one). One pass that only reads the corners, where [`estimate`]
-/// works out each triangle's cells and normal (2 million triangles on a 2-core VM: 2–3 ms against 25 ms).
+/// works out each triangle's cells and normal (the height field's 2 million triangles on a 2-core VM: 5 ms against 25 ms).
 fn bound(spec: &GridSpec, tris: &GridTriangles, fill: FillMode) -> u64 {
     let extent = tris
         .par_iter()
@@ -164,7 +164,7 @@ mod tests {
                 assert!(check(&spec, &tris, fill, estimate - 1).is_err());
             }
         }
-        // Triangles of a cell or less (the sphere at R=64: 8,064 of them): the bound counts each as its worst case,
+        // Triangles of a cell or less (the sphere at R=64): the bound counts each as its worst case,
         // a few overlaps, where a big box's faces count their area.
         let spec = GridSpec::fit(&fine, 9.0, GridSize::Resolution(64), 1.0, u64::from(u32::MAX)).unwrap();
         let tris = spec.grid_triangles(&fine);

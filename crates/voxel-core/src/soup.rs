@@ -266,7 +266,13 @@ impl TriangleSoup {
     /// Vertex `i`.
     #[inline]
     pub fn vertex(&self, i: usize) -> Vertex {
-        Vertex { position: self.positions[i], uv: self.uvs.get(i).copied().unwrap_or_default(), color: self.colors[i] }
+        Vertex { position: self.positions[i], uv: self.uv(i), color: self.colors[i] }
+    }
+
+    /// Vertex `i`'s texture coordinate (0 when the soup has none).
+    #[inline]
+    pub fn uv(&self, i: usize) -> [f32; 2] {
+        self.uvs.get(i).copied().unwrap_or_default()
     }
 
     /// Appends the texture coordinates of `count` new vertices (`values`, all or those at `used`; none: 0), before

@@ -135,7 +135,8 @@ pub(crate) fn representatives<K: Key>(count: usize, keys: impl Iterator<Item = K
                 }
             };
         }
-        // Emptied for the next part: the slots this part filled.
+        // Emptied for the next part: from each key's home slot to the first empty one. A key sits in the run of
+        // filled slots that starts at its home, and emptying a run to its end leaves none of it filled behind.
         for &(key, _) in entries {
             let mut slot = ((key.hash() << part_bits) >> (64 - bits)) as usize;
             while slots[slot] != EMPTY {
@@ -173,7 +174,7 @@ pub(crate) fn weld<T, K: Key>(corners: &[T], key: impl Fn(&T) -> K) -> Welded {
 pub(crate) fn weld_indexed<T, K: Key>(positions: &[T], key: impl Fn(&T) -> K, index: &[u32]) -> Welded {
     let first_source = representatives(positions.len(), positions.iter().map(&key));
     let mut renumbered = vec![EMPTY; positions.len()];
-    let mut welded = Welded { id: vec![0; index.len()], first: Vec::new() };
+    let mut welded = Welded { id: vec![0; index.len()], first: Vec::with_capacity(positions.len()) };
     for (c, (&source, id)) in index.iter().zip(&mut welded.id).enumerate() {
         let position = &mut renumbered[first_source[source as usize] as usize];
         if *position == EMPTY {
