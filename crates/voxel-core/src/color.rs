@@ -20,8 +20,9 @@ pub fn srgb_to_linear(c: u8) -> f32 {
 /// number of the 255 thresholds `t₁ ≤ … ≤ t₂₅₅` (tₖ: the smallest f32 it maps to k or more) that are ≤ `c`.
 /// The f32s from 2⁻¹³ to 1 fall into 1,664 slices by the top 16 bits of their encoding (the exponent and 7
 /// bits of the mantissa: each slice spans 1/128 of its start); a table gives the count at the start of `c`'s
-/// slice, and the thresholds inside the slice (at most one or two: the curve rises by at most 0.9 per slice)
-/// are compared one by one. Below 2⁻¹³ the formula gives 0.
+/// slice, and the one threshold that may lie inside the slice (the curve rises by less than one step across a
+/// slice: checked by the tests) is compared without a branch (one taken or not at random, where colours vary from
+/// cell to cell, cost a misprediction a channel). Below 2⁻¹³ the formula gives 0.
 pub fn linear_to_srgb(c: f32) -> u8 {
     static TABLES: LazyLock<SrgbThresholds> = LazyLock::new(SrgbThresholds::new);
     let bits = c.to_bits();
@@ -34,11 +35,8 @@ pub fn linear_to_srgb(c: f32) -> u8 {
         return 0; // below 2⁻¹³ (zero included), under the first threshold (checked by the tests)
     };
     let tables = &*TABLES;
-    let mut k = tables.at_slice[slice as usize];
-    while k < 255 && c >= tables.thresholds[usize::from(k) + 1] {
-        k += 1;
-    }
-    k
+    let k = tables.at_slice[slice as usize];
+    k + u8::from(c >= tables.thresholds[usize::from(k) + 1])
 }
 
 /// The low bits of an f32's encoding that a slice of [`linear_to_srgb`]'s table spans.
@@ -52,16 +50,18 @@ const SRGB_SLICES: usize = (1f32.to_bits() >> SRGB_SLICE_SHIFT) as usize - SRGB_
 
 /// The tables of [`linear_to_srgb`].
 struct SrgbThresholds {
-    /// `thresholds[k]`, k ≥ 1: the smallest f32 that the formula maps to k or more (`thresholds[0]` = 0).
-    thresholds: [f32; 256],
+    /// `thresholds[k]`, 1 ≤ k ≤ 255: the smallest f32 that the formula maps to k or more (`thresholds[0]` = 0,
+    /// `thresholds[256]` = ∞: none is reached from 255).
+    thresholds: [f32; 257],
     /// The number of thresholds at or below the start of each slice (the formula's value there).
     at_slice: [u8; SRGB_SLICES],
 }
 
 impl SrgbThresholds {
     fn new() -> Self {
-        let mut thresholds = [0.0f32; 256];
-        for (k, threshold) in thresholds.iter_mut().enumerate().skip(1) {
+        let mut thresholds = [0.0f32; 257];
+        thresholds[256] = f32::INFINITY;
+        for (k, threshold) in thresholds.iter_mut().enumerate().take(256).skip(1) {
             // Start at the curve's exact inverse at k − ½ and step one f32 at a time to the first value that
             // the formula maps to k or more (a few steps: the inverse is within rounding of it).
             let s = (k as f64 - 0.5) / 255.0;
@@ -238,6 +238,9 @@ mod tests {
         assert!(tables.thresholds[1] > 2f32.powi(-13), "{}", tables.thresholds[1]);
         let start = |s: usize| f32::from_bits((s as u32 + SRGB_FIRST_SLICE) << SRGB_SLICE_SHIFT);
         assert_eq!(start(SRGB_SLICES), 1.0);
+        // At most one threshold inside a slice: the one comparison `linear_to_srgb` makes.
+        let counts: Vec<u8> = (0..=SRGB_SLICES).map(|s| linear_to_srgb_formula(start(s))).collect();
+        assert!(counts.windows(2).all(|w| w[1] - w[0] <= 1), "{counts:?}");
         assert!(
             (0..=SRGB_SLICES).all(|s| table_matches(start(s)) && table_matches(f32::from_bits(start(s).to_bits() - 1)))
         );
