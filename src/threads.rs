@@ -6,7 +6,8 @@
 //!   single-threaded executor: the multi-threaded one wakes a worker thread for every system, which cost more
 //!   (about 2 ms a frame) than running the app's light systems in parallel gained. Per-voxel systems still
 //!   spread their work over every core;
-//! - voxelization jobs run in pools of their own whose threads run at a low priority (`job_queue`): a big
+//! - jobs (voxelizations, the transition's layouts) run in pools of their own whose threads run at a low
+//!   priority (`job_queue`): a big
 //!   model's seconds of voxelizing take only the time the frame leaves, and a second job runs beside it in a
 //!   second pool. A job is handed to those pools, not run from an async-compute thread ([`spawn_job`]): the
 //!   async-compute pool has one thread on 2 cores, and Bevy's own tasks there (compiling pipelines) are waited

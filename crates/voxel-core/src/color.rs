@@ -109,8 +109,7 @@ fn round_to_u8(x: f32) -> u8 {
 /// one colour has that colour wherever it is sampled ([`flat_color`]).
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
     // The corners' colours, and their texture coordinates when there is a texture (not their positions).
-    let corners = soup.triangles()[t].map(|i| i as usize);
-    let [a, b, c] = corners.map(|i| soup.colors()[i]);
+    let [a, b, c] = soup.triangle_colors(t);
     let material = soup.material_of(t);
     let [w0, w1, w2] = w.map(|w| w as f32);
     // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).
@@ -121,7 +120,7 @@ pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
         *out = material.base_color[ch] * color[ch];
     }
     if let Some(binding) = &material.texture {
-        let [a, b, c] = corners.map(|i| soup.uv(i));
+        let [a, b, c] = soup.triangles()[t].map(|i| soup.uv(i as usize));
         let uv = [lerp(a[0], b[0], c[0]), lerp(a[1], b[1], c[1])];
         let texel = binding.texture.sample_nearest(uv, binding.wrap);
         for ch in 0..3 {
@@ -144,7 +143,7 @@ pub fn flat_color(soup: &TriangleSoup, t: usize) -> Option<(u32, [f32; 4])> {
     if soup.material_of(t).texture.is_some() {
         return None;
     }
-    let [a, b, c] = soup.triangles()[t].map(|i| soup.colors()[i as usize]);
+    let [a, b, c] = soup.triangle_colors(t);
     (a == b && b == c).then_some((soup.triangle_parts[t], a))
 }
 

@@ -302,6 +302,12 @@ impl TriangleSoup {
         self.triangles[t].map(|i| self.positions[i as usize])
     }
 
+    /// The three corners' colours (linear `COLOR_0`) of triangle `t`.
+    #[inline]
+    pub fn triangle_colors(&self, t: usize) -> [[f32; 4]; 3] {
+        self.triangles[t].map(|i| self.colors[i as usize])
+    }
+
     /// Every triangle's corners in turn, three a triangle.
     pub fn corners(&self) -> impl ExactSizeIterator<Item = Vertex> + '_ {
         self.triangles.as_flattened().iter().map(|&i| self.vertex(i as usize))
