@@ -1,9 +1,10 @@
 //! Column crossings: where each +Z column of the grid (through the cell centres' x and y) meets the
 //! triangles, found triangle-major by rasterization or column-major by BVH queries, and how a crossing counts
 //! ([`Role`]). The fill ([`crate::fill`]) counts them into cells; the orientation ([`crate::orient`]) reads them
-//! to decide the roles.
+//! to decide the roles. The fill also rasterizes the parity triangles onto the columns along X and Y
+//! ([`crossings_along`]), the same way with the coordinates cycled.
 
-use glam::Vec3A;
+use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use rayon::prelude::*;
 
@@ -171,11 +172,34 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
     lo
 }
 
+/// Triangle `t` with each corner's coordinates cycled so that `axis` comes last: `(axis + 1) % 3` as x,
+/// `(axis + 2) % 3` as y (a rotation: the handedness is kept). Along Z, `t` itself.
+#[inline]
+pub(crate) fn cycled(t: GridTriangle, axis: usize) -> GridTriangle {
+    match axis {
+        2 => t,
+        _ => t.map(|c| DVec3::new(c[(axis + 1) % 3], c[(axis + 2) % 3], c[axis])),
+    }
+}
+
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
 /// consistent tie-break of [`covers_column`]. Once `progress` is cancelled the remaining triangles are passed
 /// over (the caller's next stage ends the run).
 pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Columns {
-    let ny = spec.dims[1];
+    crossings_along::<2>(spec, tris, |_| true, progress)
+}
+
+/// The crossings of the columns along axis `AXIS` (0, 1 or 2) with the triangles that `keep` accepts, as
+/// [`crossings_by_rasterizing`] finds those along Z: each corner's coordinates are cycled so that `AXIS` comes
+/// last (`(AXIS + 1) % 3` as x, `(AXIS + 2) % 3` as y: column `x * ny + y` of those two, the depth along
+/// `AXIS`), which keeps the triangles' handedness. `faces_up` then tells the facing along `AXIS`.
+pub(crate) fn crossings_along<const AXIS: usize>(
+    spec: &GridSpec,
+    tris: &GridTriangles,
+    keep: impl Fn(usize) -> bool + Sync,
+    progress: &Progress,
+) -> Columns {
+    let (nx, ny) = (spec.dims[(AXIS + 1) % 3], spec.dims[(AXIS + 2) % 3]);
     let per_task = triangles_per_task(tris.len());
     let mut faces_up = vec![false; tris.len()];
     let lists: Vec<Segments<Crossing>> = faces_up
@@ -188,8 +212,11 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, pr
                     break;
                 }
                 let index = chunk_index * per_task + k;
-                let (t, triangle) = (&tris.get(index), index as u32);
-                let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), spec.dims[0]);
+                if !keep(index) {
+                    continue;
+                }
+                let (t, triangle) = (&cycled(tris.get(index), AXIS), index as u32);
+                let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), nx);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 if xs.is_empty() || ys.is_empty() {
                     continue; // no column centre under the triangle's extent
@@ -209,7 +236,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, pr
         .collect();
     // Made triangle-major: a stable sort by column keeps the triangles' order, then each column's few
     // crossings are sorted by depth.
-    let count = spec.dims[0] as usize * ny as usize;
+    let count = nx as usize * ny as usize;
     let mut crossings = radix::sort_parts_by_key(Segments::concat(lists), radix::bits_for(count), |c| c.column);
     crossings.chunk_by_mut(|a, b| a.column == b.column).for_each(|column| column.sort_unstable_by(crossing_order));
     Columns::from_sorted(count, crossings, faces_up)

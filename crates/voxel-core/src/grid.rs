@@ -342,6 +342,16 @@ impl BitGrid {
         self.words[i / 64] |= 1 << (i % 64);
     }
 
+    /// Keeps the cells set in both `self` and `other` (of the same length).
+    pub fn intersect(&mut self, other: &BitGrid) {
+        self.words.iter_mut().zip(&other.words).for_each(|(word, other)| *word &= other);
+    }
+
+    /// Sets the cells set in `other` (of the same length) too.
+    pub fn unite(&mut self, other: &BitGrid) {
+        self.words.iter_mut().zip(&other.words).for_each(|(word, other)| *word |= other);
+    }
+
     /// Sets cells `range` (used for filled runs of a column).
     pub fn set_range(&mut self, range: std::ops::Range<usize>) {
         let mut i = range.start;

@@ -43,7 +43,7 @@
 //!
 //! Open sheets (border edges: the fried egg's white, a model closed only through T-junctions), unbalanced
 //! non-manifold ones and non-orientable ones count by parity (see the column count in
-//! [`crate::fill`]), so a model made only of such parts fills exactly as whole-model parity did.
+//! [`crate::fill`]: where they alone fill a cell, they must enclose it along every axis).
 
 mod edges;
 mod parts;

@@ -5,7 +5,7 @@ use std::collections::HashSet;
 use std::f64::consts::PI;
 
 use voxel_core::shapes::{IndexedMesh, cuboid, cylinder, torus, uv_sphere};
-use voxel_core::{FillMode, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize};
+use voxel_core::{FillMode, Method, ShellMode, TriangleSoup, VoxelModel, VoxelizeOptions, voxelize};
 
 use crate::common::{at_resolution, cells, relative_volume, tilted};
 
@@ -218,5 +218,80 @@ fn hollow_sphere_and_slab_has_no_wall_around_an_empty_inside() {
             FillMode::Winding => assert_eq!(walls, 0),
             _ => assert!(walls > 100, "parity: only {walls} walls round the empty overlap"),
         }
+    }
+}
+
+/// The side of a cylinder alone (an open tube: no caps), its axis along `axis` (0, 1, 2: x, y, z), every other
+/// triangle facing inwards (as files often have them: then the columns do not balance as the triangles face, and
+/// the tube's sheet is found open and counts by parity; facing out, columns across it would count it closed).
+fn open_tube(axis: usize) -> IndexedMesh {
+    let mut tube = cylinder(0.5, -1.0, 1.0, 48);
+    tube.triangles.retain(|t| !t.contains(&0) && !t.contains(&1)); // the caps' fans around vertices 0 and 1
+    tube.triangles.iter_mut().step_by(2).for_each(|t| t.swap(1, 2));
+    for p in &mut tube.positions {
+        // Built along y: the coordinates cycled so that y lands on `axis`.
+        *p = match axis {
+            0 => [p[1], p[2], p[0]],
+            1 => *p,
+            _ => [p[2], p[0], p[1]],
+        };
+    }
+    tube
+}
+
+#[test]
+fn an_open_tube_stays_hollow_whichever_way_it_lies() {
+    // Its walls pair up in the columns across it, but the columns along it find no wall: it encloses nothing.
+    for axis in 0..3 {
+        let soup = TriangleSoup::from_mesh(&open_tube(axis), WHITE);
+        for method in [Method::Fast, Method::Bvh, Method::Reference] {
+            let fill_only = VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(16) };
+            assert_eq!(voxelize(&soup, &fill_only).unwrap().len(), 0, "tube along axis {axis}, {method:?}");
+        }
+        // With its shell: exactly the surface cells, as without a fill.
+        let full = voxelize(&soup, &at_resolution(48)).unwrap();
+        let surface = voxelize(&soup, &with_fill(FillMode::None, 48)).unwrap();
+        assert_eq!(cells(&full), cells(&surface), "tube along axis {axis}");
+        // The closed cylinder fills: about π r² h of the grid's units.
+        let closed = voxelize(&TriangleSoup::from_mesh(&cylinder(0.5, -1.0, 1.0, 48), WHITE), &at_resolution(48));
+        assert!(closed.unwrap().len() > 3 * full.len(), "axis {axis}");
+    }
+}
+
+#[test]
+fn a_rolling_open_sheet_fills_no_valley_and_no_hill() {
+    // A terrain: columns across its hills cross it an even number of times, but the columns along its up axis
+    // cross it once. Nothing but its surface is kept, at any grid.
+    let field = crate::scenes::height_field(40);
+    let mesh = IndexedMesh {
+        positions: field.positions.clone(),
+        triangles: field.indices.chunks(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    };
+    let soup = TriangleSoup::from_mesh(&mesh, WHITE);
+    for r in [24, 64] {
+        let fill_only = voxelize(&soup, &VoxelizeOptions { shell: ShellMode::None, ..at_resolution(r) }).unwrap();
+        assert_eq!(fill_only.len(), 0, "R={r}");
+        let full = voxelize(&soup, &at_resolution(r)).unwrap();
+        assert_eq!(full.len(), full.stats.surface, "R={r}");
+        assert!(full.stats.grid[1] > 2, "the hills span several cells: {:?}", full.stats.grid);
+    }
+}
+
+#[test]
+fn a_box_closed_only_through_a_t_junction_fills_as_the_closed_box() {
+    // Triangle [0, 4, 6] split at the middle of its box edge 0–4, which the side face's triangle [0, 5, 4] keeps
+    // whole: the edges do not pair, the box is an open sheet and counts by parity, enclosed along every axis.
+    let closed = cuboid([0.25; 3], [3.75, 2.75, 3.25]);
+    let mut junction = closed.clone();
+    junction.positions.push([0.25, 0.25, 1.75]);
+    let at = junction.triangles.iter().position(|t| *t == [0, 4, 6]).unwrap();
+    junction.triangles[at] = [0, 8, 6];
+    junction.triangles.push([8, 4, 6]);
+    for method in [Method::Fast, Method::Bvh, Method::Reference] {
+        let fill_only = VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(20) };
+        let run = |mesh: &IndexedMesh| cells(&voxelize(&TriangleSoup::from_mesh(mesh, WHITE), &fill_only).unwrap());
+        let box_cells = run(&closed);
+        assert!(box_cells.len() > 20 * 14 * 16, "{}", box_cells.len());
+        assert_eq!(run(&junction), box_cells, "{method:?}");
     }
 }
