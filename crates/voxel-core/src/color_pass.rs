@@ -28,9 +28,9 @@ const CELLS_PER_TASK: usize = 1024;
 const FAR_PER_TASK: usize = 64;
 
 /// Up to this many grid cells per far cell, [`nearest_far`] transforms the grid ([`nearest_shell_cells`]) rather
-/// than walking the octree once a far cell. Measured on a 2-core VM (the height field at R=256: 3.7 M cells,
-/// 45,421 far cells a few dozen cells below the sheet): the transform 80–110 ms, about 25 ns a cell; the walks
-/// 150–190 ms, about 3.5 µs each; even at about 140 cells per far cell.
+/// than walking the octree once a far cell. Measured on a 2-core VM (the height field at R=256 with `--fill
+/// parity`: 3.7 M cells, 45,421 far cells a few dozen cells below the sheet): the transform 80–110 ms, about 25 ns
+/// a cell; the walks 150–190 ms, about 3.5 µs each; even at about 140 cells per far cell.
 const GRID_CELLS_PER_FAR_CELL: usize = 128;
 
 /// The largest grid [`nearest_far`] transforms: 2²⁴ cells, 134 MB while it runs (a cube at R=256).
