@@ -280,13 +280,17 @@ fn a_rolling_open_sheet_fills_no_valley_and_no_hill() {
 #[test]
 fn a_box_closed_only_through_a_t_junction_fills_as_the_closed_box() {
     // Triangle [0, 4, 6] split at the middle of its box edge 0–4, which the side face's triangle [0, 5, 4] keeps
-    // whole: the edges do not pair, the box is an open sheet and counts by parity, enclosed along every axis.
+    // whole: the edges do not pair, the box is an open sheet. One bottom triangle faces inwards, so that the
+    // columns do not balance as the triangles face: the sheet is analysed, found open, and counts by parity,
+    // enclosed along every axis.
     let closed = cuboid([0.25; 3], [3.75, 2.75, 3.25]);
     let mut junction = closed.clone();
     junction.positions.push([0.25, 0.25, 1.75]);
     let at = junction.triangles.iter().position(|t| *t == [0, 4, 6]).unwrap();
     junction.triangles[at] = [0, 8, 6];
     junction.triangles.push([8, 4, 6]);
+    let bottom = junction.triangles.iter().position(|t| *t == [0, 2, 3]).unwrap();
+    junction.triangles[bottom].swap(1, 2);
     for method in [Method::Fast, Method::Bvh, Method::Reference] {
         let fill_only = VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(20) };
         let run = |mesh: &IndexedMesh| cells(&voxelize(&TriangleSoup::from_mesh(mesh, WHITE), &fill_only).unwrap());
