@@ -172,13 +172,13 @@ fn first_where(ys: std::ops::Range<u32>, holds: impl Fn(u32) -> bool) -> u32 {
     lo
 }
 
-/// Triangle `t` with each corner's coordinates cycled so that `axis` comes last: `(axis + 1) % 3` as x,
-/// `(axis + 2) % 3` as y (a rotation: the handedness is kept). Along Z, `t` itself.
+/// Point `p` with its coordinates cycled so that `axis` comes last: `(axis + 1) % 3` as x, `(axis + 2) % 3` as y
+/// (a rotation: the handedness is kept). Along Z, `p` itself.
 #[inline]
-pub(crate) fn cycled(t: GridTriangle, axis: usize) -> GridTriangle {
+pub(crate) fn cycled(p: DVec3, axis: usize) -> DVec3 {
     match axis {
-        2 => t,
-        _ => t.map(|c| DVec3::new(c[(axis + 1) % 3], c[(axis + 2) % 3], c[axis])),
+        2 => p,
+        _ => DVec3::new(p[(axis + 1) % 3], p[(axis + 2) % 3], p[axis]),
     }
 }
 
@@ -190,7 +190,7 @@ pub(crate) fn crossings_by_rasterizing(spec: &GridSpec, tris: &GridTriangles, pr
 }
 
 /// The crossings of the columns along axis `AXIS` (0, 1 or 2) with the triangles that `keep` accepts, as
-/// [`crossings_by_rasterizing`] finds those along Z: each corner's coordinates are cycled so that `AXIS` comes
+/// [`crossings_by_rasterizing`] finds those along Z: each corner [`cycled`] so that `AXIS` comes
 /// last (`(AXIS + 1) % 3` as x, `(AXIS + 2) % 3` as y: column `x * ny + y` of those two, the depth along
 /// `AXIS`), which keeps the triangles' handedness. `faces_up` then tells the facing along `AXIS`.
 pub(crate) fn crossings_along<const AXIS: usize>(
@@ -215,7 +215,7 @@ pub(crate) fn crossings_along<const AXIS: usize>(
                 if !keep(index) {
                     continue;
                 }
-                let (t, triangle) = (&cycled(tris.get(index), AXIS), index as u32);
+                let (t, triangle) = (&tris.get(index).map(|c| cycled(c, AXIS)), index as u32);
                 let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), nx);
                 let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
                 if xs.is_empty() || ys.is_empty() {

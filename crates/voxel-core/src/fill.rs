@@ -40,7 +40,7 @@ use crate::columns::{
     Columns, Crossing, Role, crossings_along, crossings_by_bvh, crossings_by_rasterizing, cycled, parity_counts,
 };
 use crate::float;
-use crate::geom::{covers_column, depth_at};
+use crate::geom::{covers_column, depth_at, triangle_normal};
 use crate::grid::{BitGrid, GridSpec, GridTriangles};
 use crate::options::{FillMode, Method};
 use crate::orient::{closed_parts, winding_roles};
@@ -102,8 +102,7 @@ const FACING_SAMPLE: usize = 16;
 fn facing_most(tris: &GridTriangles, roles: &[Role]) -> usize {
     let mut net = DVec3::ZERO;
     for t in (0..tris.len()).step_by(FACING_SAMPLE).filter(|&t| roles[t] == Role::Parity) {
-        let t = tris.get(t);
-        net += (t[1] - t[0]).cross(t[2] - t[0]);
+        net += triangle_normal(&tris.get(t));
     }
     usize::from(net.y.abs() > net.x.abs())
 }
@@ -236,10 +235,10 @@ fn reference_fill(spec: &GridSpec, tris: &GridTriangles, roles: &[Role], agree: 
 /// Whether the parity triangles enclose `centre` along `axis`, brute force: the line along `axis` through it
 /// crosses them an even number of times, an odd number of them beyond it.
 fn enclosed_by_parity(tris: &GridTriangles, roles: &[Role], axis: usize, centre: DVec3) -> bool {
-    let c = cycled([centre; 3], axis)[0];
+    let c = cycled(centre, axis);
     let (mut all, mut beyond) = (0, 0);
     for (t, _) in tris.iter().zip(roles).filter(|(_, role)| **role == Role::Parity) {
-        let t = cycled(t, axis);
+        let t = t.map(|corner| cycled(corner, axis));
         if covers_column(&t, [c.x, c.y]) {
             all += 1;
             beyond += usize::from(depth_at(&t, [c.x, c.y]) > c.z);
