@@ -4,6 +4,8 @@
 //! to decide the roles. The fill also rasterizes the parity triangles onto the columns along X and Y
 //! ([`crossings_along`]), the same way with the coordinates cycled.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use rayon::prelude::*;
@@ -111,7 +113,7 @@ fn column_center(spec: &GridSpec, col: usize) -> [f64; 2] {
 }
 
 /// Columns whose centres lie in the closed range [lo, hi] along one axis.
-fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
+pub(crate) fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
     let first = float::ceil(lo - 0.5).max(0.0);
     let last = float::floor(hi - 0.5).min(f64::from(n) - 1.0);
     if first.is_nan() || last.is_nan() || first > last {
@@ -122,7 +124,7 @@ fn column_range(lo: f64, hi: f64, n: u32) -> std::ops::Range<u32> {
 
 /// Triangles per task of the rasterization: small enough that both threads share out a few big triangles
 /// (a box has twelve, four of which cross every column), at most 2048.
-fn triangles_per_task(count: usize) -> usize {
+pub(crate) fn triangles_per_task(count: usize) -> usize {
     count.div_ceil(rayon::current_num_threads() * 8).clamp(1, 2048)
 }
 
@@ -182,6 +184,52 @@ pub(crate) fn cycled(p: DVec3, axis: usize) -> DVec3 {
     }
 }
 
+/// Calls `f(x, y)` for every column of an `nx` × `ny` grid of them whose centre triangle `t` covers
+/// ([`covers_column`], by rows: [`covered_run`]), and returns the triangle's [`projected_orientation`]; `None`
+/// (and no call) when no column centre lies under its extent or it is seen edge-on.
+fn covered_columns(t: &GridTriangle, nx: u32, ny: u32, mut f: impl FnMut(u32, u32)) -> Option<bool> {
+    let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), nx);
+    let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
+    if xs.is_empty() || ys.is_empty() {
+        return None;
+    }
+    let counter_clockwise = projected_orientation(t)?;
+    for x in xs {
+        for y in covered_run(t, counter_clockwise, f64::from(x) + 0.5, ys.clone()) {
+            f(x, y);
+        }
+    }
+    Some(counter_clockwise)
+}
+
+/// The columns along one axis (those of [`crossings_along`]) that some triangle crosses, marked triangle by
+/// triangle from any number of threads: for finding a column crossed twice.
+pub(crate) struct Crossed {
+    axis: usize,
+    /// The columns' counts, `nx` × `ny`.
+    dims: [u32; 2],
+    marked: Vec<AtomicBool>,
+}
+
+impl Crossed {
+    /// No column along `axis` of `spec`'s grid marked yet.
+    pub(crate) fn new(spec: &GridSpec, axis: usize) -> Self {
+        let dims = [spec.dims[(axis + 1) % 3], spec.dims[(axis + 2) % 3]];
+        Self { axis, dims, marked: (0..dims[0] as usize * dims[1] as usize).map(|_| AtomicBool::new(false)).collect() }
+    }
+
+    /// Marks the columns that triangle `t` (grid coordinates) crosses; false when one of them was marked
+    /// already (by another triangle).
+    pub(crate) fn mark(&self, t: &GridTriangle) -> bool {
+        let t = &t.map(|c| cycled(c, self.axis));
+        let mut again = false;
+        covered_columns(t, self.dims[0], self.dims[1], |x, y| {
+            again |= self.marked[(x * self.dims[1] + y) as usize].swap(true, Ordering::Relaxed);
+        });
+        !again
+    }
+}
+
 /// Every column crossing, triangle-major: each triangle is rasterized onto the column grid with the
 /// consistent tie-break of [`covers_column`]. Once `progress` is cancelled the remaining triangles are passed
 /// over (the caller's next stage ends the run).
@@ -216,19 +264,12 @@ pub(crate) fn crossings_along<const AXIS: usize>(
                     continue;
                 }
                 let (t, triangle) = (&tris.get(index).map(|c| cycled(c, AXIS)), index as u32);
-                let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), nx);
-                let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
-                if xs.is_empty() || ys.is_empty() {
-                    continue; // no column centre under the triangle's extent
-                }
-                let Some(counter_clockwise) = projected_orientation(t) else { continue };
-                *up = counter_clockwise;
-                for x in xs {
-                    let px = f64::from(x) + 0.5;
-                    for y in covered_run(t, counter_clockwise, px, ys.clone()) {
-                        let p = [px, f64::from(y) + 0.5];
-                        out.push(Crossing { column: x * ny + y, triangle, z: depth_at(t, p) });
-                    }
+                let covered = covered_columns(t, nx, ny, |x, y| {
+                    let z = depth_at(t, [f64::from(x) + 0.5, f64::from(y) + 0.5]);
+                    out.push(Crossing { column: x * ny + y, triangle, z });
+                });
+                if let Some(counter_clockwise) = covered {
+                    *up = counter_clockwise;
                 }
             }
             out

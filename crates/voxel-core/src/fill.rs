@@ -30,6 +30,8 @@
 //! as it is when they do): the count from below equals the count from above, which is what the reference
 //! ([`reference_fill`]) uses.
 
+mod height_field;
+
 use std::sync::OnceLock;
 
 use glam::DVec3;
@@ -40,12 +42,13 @@ use crate::columns::{
     Columns, Crossing, Role, crossings_along, crossings_by_bvh, crossings_by_rasterizing, cycled, parity_counts,
 };
 use crate::float;
-use crate::geom::{covers_column, depth_at, triangle_normal};
+use crate::geom::{covers_column, depth_at};
 use crate::grid::{BitGrid, GridSpec, GridTriangles};
 use crate::options::{FillMode, Method};
 use crate::orient::{closed_parts, winding_roles};
 use crate::progress::Progress;
 use crate::soup::TriangleSoup;
+use height_field::{fills_nothing, net_facing};
 
 /// Calls `emit` with the runs of cells of one column that are inside by the column count of the module
 /// docs: cell k is inside when W + P ≠ 0 for the crossings at or below its centre k + 0.5. Each run comes with
@@ -94,16 +97,9 @@ fn keep_enclosed(spec: &GridSpec, tris: &GridTriangles, roles: &[Role], cells: &
     }
 }
 
-/// Parity triangles sampled by [`facing_most`]: every this many.
-const FACING_SAMPLE: usize = 16;
-
-/// Of X (0) and Y (1), the axis along which the parity triangles' areas, signed by their facing, add up to more
-/// (from every [`FACING_SAMPLE`]th triangle: only an order of work depends on it).
+/// Of X (0) and Y (1), the axis along which the parity triangles face most ([`net_facing`]).
 fn facing_most(tris: &GridTriangles, roles: &[Role]) -> usize {
-    let mut net = DVec3::ZERO;
-    for t in (0..tris.len()).step_by(FACING_SAMPLE).filter(|&t| roles[t] == Role::Parity) {
-        net += triangle_normal(&tris.get(t));
-    }
+    let net = net_facing(tris, |t| roles[t] == Role::Parity);
     usize::from(net.y.abs() > net.x.abs())
 }
 
@@ -170,9 +166,14 @@ pub(crate) fn solid_fill(
         FillMode::Winding => winding_roles(
             columns.as_ref(),
             || crossings_by_rasterizing(spec, tris, progress),
+            // The reference decides every cell by itself.
+            || method != Method::Reference && fills_nothing(spec, tris, progress),
             || closed_parts(soup, tris),
         ),
-        _ => vec![Role::Parity; tris.len()],
+        _ => Some(vec![Role::Parity; tris.len()]),
+    };
+    let Some(roles) = roles else {
+        return BitGrid::new(spec.cell_count());
     };
     // Under the winding rule the cells inside by parity alone (the sheets that cannot be closed) must be enclosed
     // along X and Y too.

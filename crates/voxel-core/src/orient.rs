@@ -53,6 +53,7 @@ mod weld;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::columns::{Columns, Role, parity_counts};
@@ -65,12 +66,14 @@ pub(crate) use soup_parts::closed_parts;
 /// The role of every triangle under the nonzero winding rule (see the module docs). `columns` are the
 /// model's column crossings when the caller has them; otherwise `crossings` computes them. `closed_parts`
 /// gives the closed parts of the triangles ([`Parts::find`], or [`closed_parts`] reusing a soup's), when the
-/// triangles as in the file do not do.
+/// triangles as in the file do not do; unless `fills_nothing` finds first that with roles from the parts,
+/// whatever they are, the fill is empty: then `None`.
 pub(crate) fn winding_roles(
     columns: Option<&Columns>,
     crossings: impl FnOnce() -> Columns,
+    fills_nothing: impl FnOnce() -> bool,
     closed_parts: impl FnOnce() -> Arc<Parts>,
-) -> Vec<Role> {
+) -> Option<Vec<Role>> {
     let computed;
     let columns = match columns {
         Some(c) => c,
@@ -81,7 +84,10 @@ pub(crate) fn winding_roles(
     };
     let as_in_file: Vec<Role> = columns.faces_up.iter().map(|&up| Role::facing(up)).collect();
     if consistent_as_in_file(columns, &as_in_file) {
-        return as_in_file;
+        return Some(as_in_file);
+    }
+    if fills_nothing() {
+        return None;
     }
     let parts = closed_parts();
     let inward = &parts.inward;
@@ -94,7 +100,7 @@ pub(crate) fn winding_roles(
         };
     }
     if !inward.contains(&true) {
-        return roles;
+        return Some(roles);
     }
     let exposed = exposed_parts(columns, &roles, &parts.of, inward);
     for (t, role) in roles.iter_mut().enumerate() {
@@ -102,40 +108,44 @@ pub(crate) fn winding_roles(
             *role = role.reversed();
         }
     }
-    roles
+    Some(roles)
 }
 
 /// Analyses `soup`'s closed parts now (the analysis it keeps, [`SoupParts::kept_by`]) when it has none
-/// yet and its facing does not cancel out on the XY plane ([`facing_unbalanced`]): then a winding fill will
-/// very likely need them, and the caller can run this beside work that does not (the grid's set-up), unless
-/// that work is already over (`settled`: then the fill has run the analysis itself if it needed it). A soup
-/// that the hint misses is analysed when its columns show the need, as before.
+/// yet and its facing hints that a winding fill will need them ([`parts_likely_needed`]): then the caller can run
+/// this beside work that does not (the grid's set-up), unless that work is already over (`settled`: then the
+/// fill has run the analysis itself if it needed it). A soup that the hint misses is analysed when its columns
+/// show the need, as before.
 pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicBool) {
     // `settled` is asked again after the hint's pass over the triangles.
     let over = || settled.load(Ordering::Relaxed);
-    if !over() && !SoupParts::kept(soup) && facing_unbalanced(soup) && !over() {
+    if !over() && !SoupParts::kept(soup) && parts_likely_needed(soup) && !over() {
         SoupParts::kept_by(soup);
     }
 }
 
-/// Whether `soup`'s triangles, facing as in the file, fail to cancel out on the XY plane: their areas
-/// projected along the columns, signed by facing, do not add up to zero (beyond rounding and quantization:
-/// more than 10⁻⁵ of their sum unsigned; the Draco milk truck leaves 1.7·10⁻⁶, the FlightHelmet's open
-/// sheets 7·10⁻⁴). A closed surface's do, whichever way it faces; an open sheet's, or a closed part's with
-/// some horizontal triangles reversed, usually do not, and then the columns of a fine grid cannot all balance
-/// as in the file, so the winding fill will need the soup's part analysis. Only a hint for starting that
-/// analysis before the grid exists: the fill itself decides by its columns ([`winding_roles`]).
-fn facing_unbalanced(soup: &TriangleSoup) -> bool {
-    let (mut net, mut total) = (0.0f64, 0.0f64);
+/// Whether `soup`'s triangles, facing as in the file, fail to cancel out on the XY plane, yet do not all face
+/// one way along an axis. Their areas projected along the columns, signed by facing, do not add up to zero
+/// (beyond rounding and quantization: more than 10⁻⁵ of their sum unsigned; the Draco milk truck leaves
+/// 1.7·10⁻⁶, the FlightHelmet's open sheets 7·10⁻⁴). A closed surface's do, whichever way it faces; an open
+/// sheet's, or a closed part's with some horizontal triangles reversed, usually do not, and then the columns of a
+/// fine grid cannot all balance as in the file, so the winding fill will need the soup's part analysis — unless
+/// it finds first that it fills nothing (a terrain, a cloth: see `fill::height_field`), which a sheet whose
+/// projected areas along some axis all face one way (to within 10⁻³ of their sum unsigned) most likely is. Only
+/// a hint for starting that analysis before the grid exists: the fill itself decides by its columns
+/// ([`winding_roles`]).
+fn parts_likely_needed(soup: &TriangleSoup) -> bool {
+    let (mut net, mut total) = (DVec3::ZERO, DVec3::ZERO);
     for t in 0..soup.triangle_count() {
         let [a, b, c] = soup.triangle_positions(t);
         // Differences of nearby f32 coordinates are exact; their products are exact in f64.
-        let d = |p: [f32; 3], axis: usize| f64::from(p[axis] - a[axis]);
-        let twice_area = d(b, 0) * d(c, 1) - d(b, 1) * d(c, 0);
-        net += twice_area;
-        total += twice_area.abs();
+        let d = |p: [f32; 3]| DVec3::from(std::array::from_fn::<f64, 3, _>(|k| f64::from(p[k] - a[k])));
+        let twice_areas = d(b).cross(d(c));
+        net += twice_areas;
+        total += twice_areas.abs();
     }
-    net.abs() > 1e-5 * total
+    let one_way = (0..3).any(|k| total[k] > 0.0 && net[k].abs() >= (1.0 - 1e-3) * total[k]);
+    net.z.abs() > 1e-5 * total.z && !one_way
 }
 
 /// Whether the triangles as they face in the file already wind consistently as far as any column can
@@ -206,8 +216,10 @@ mod tests {
         winding_roles(
             None,
             || crossings_by_rasterizing(&spec, &tris, &Progress::new()),
+            || false,
             || Arc::new(Parts::find(&tris)),
         )
+        .expect("the roles")
     }
 
     fn reversed(mut mesh: IndexedMesh, every: usize) -> IndexedMesh {
@@ -266,16 +278,22 @@ mod tests {
     }
 
     #[test]
-    fn the_hint_sees_open_sheets_and_reversed_horizontal_triangles_but_not_closed_surfaces() {
-        let hint = |mesh: &IndexedMesh| facing_unbalanced(&TriangleSoup::from_mesh(mesh, [1.0; 4]));
+    fn the_hint_sees_open_sheets_and_reversed_horizontal_triangles_but_not_closed_surfaces_nor_height_fields() {
+        let hint = |mesh: &IndexedMesh| parts_likely_needed(&TriangleSoup::from_mesh(mesh, [1.0; 4]));
         // Closed, facing out or in: the projections cancel.
         assert!(!hint(&block()) && !hint(&reversed(block(), 1)));
-        // A reversed bottom triangle (the last four are the horizontal faces), or the top missing.
+        // A reversed bottom triangle (the last four are the horizontal faces: bottom, then top), or half the top
+        // missing.
         let mut bottom = block();
         bottom.triangles[8].swap(1, 2);
         let mut open = block();
-        open.triangles.truncate(10);
+        open.triangles.truncate(11);
         assert!(hint(&bottom) && hint(&open));
+        // Without its top the box is a tray: every triangle that projects on the XY plane faces down, as a
+        // terrain's face up: the fill will find it empty without the parts.
+        let mut tray = block();
+        tray.triangles.truncate(10);
+        assert!(!hint(&tray));
         // A reversed side triangle projects to a line: nothing to see, the columns decide.
         let mut side = block();
         side.triangles[0].swap(1, 2);

@@ -1,0 +1,187 @@
+//! Models the winding fill leaves empty, found before any crossing is counted: a terrain, a cloth, a sheet of
+//! paper — one open surface that the lines along some axis cross at most once.
+//!
+//! # Why nothing is filled
+//!
+//! Say that every line along axis A through the cell centres crosses at most one triangle (the rasterizer's
+//! exact test, [`crate::columns::Crossed`]), and that every triangle within [`NEAR`] of a cell centre is crossed
+//! by the line along A through that centre. The test runs only where the file's own facing does not balance the
+//! columns ([`crate::orient::winding_roles`]; an open sheet that does, counts as it faces), so the roles come from
+//! the parts: closed, oriented surfaces count by winding, the rest by parity. A cell is filled by the column count
+//! ([`crate::fill`]) in one of two ways, and neither can happen:
+//!
+//! * **Inside by parity alone** (W = 0, P = 1): the parity triangles must put it inside along X, Y and Z alike,
+//!   and a line with an odd number of parity crossings, or with none, encloses nothing. Along A a line has at
+//!   most one.
+//! * **Inside by winding** (W ≠ 0): a line crosses a closed surface an even number of times (the signed crossings
+//!   add up to zero), so one that crosses a single triangle does not cross a closed part: the triangles near a
+//!   centre are not of one. W counts the closed parts' crossings below the cell centre p along its Z column, their
+//!   depths rounded; as p is farther than [`NEAR`] from those triangles — a thousand times the rounding of a
+//!   depth, even on a steep triangle, whose depth's error and distance along Z grow alike — W is exactly the
+//!   closed parts' winding number around p, which is the same for every point near p: so also for the point that
+//!   the rasterizer's tie-break puts on the line along A through p. On that line, the crossings on either side of
+//!   the point add up (signed) to ± that winding number, so a non-zero one needs a crossing on each side: two.
+//!
+//! Both conditions are checked in one parallel pass over the triangles, which stops at the first line crossed
+//! twice (a closed model's is found within the triangles of its first part) or the first triangle near a centre
+//! whose line misses it. The axis is the one the triangles face most (a terrain's up axis: from a sample,
+//! [`net_facing`]). Grids whose coordinates fall on a lattice do put centres on triangles: the height
+//! field of `benches/big.rs` has one at R=256, on a triangle its up line crosses.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::columns::{Crossed, column_range, cycled, triangles_per_task};
+use crate::geom::{GridTriangle, covers_column, triangle_normal};
+use crate::grid::{GridSpec, GridTriangles};
+use crate::progress::Progress;
+
+/// Triangles sampled by [`net_facing`]: every this many.
+const FACING_SAMPLE: usize = 16;
+
+/// The sum of the normals (twice the areas, signed by facing) of the triangles `keep` accepts among every
+/// [`FACING_SAMPLE`]th: which way they face most (only an order of work depends on it).
+pub(super) fn net_facing(tris: &GridTriangles, keep: impl Fn(usize) -> bool) -> DVec3 {
+    (0..tris.len()).step_by(FACING_SAMPLE).filter(|&t| keep(t)).map(|t| triangle_normal(&tris.get(t))).sum()
+}
+
+/// How near (in cells) a cell centre may come to a triangle for [`fills_nothing`] to decide: far above the
+/// rounding of a crossing's depth (about 10⁻¹² of a cell on a grid of 2048).
+const NEAR: f64 = 1e-9;
+
+/// Whether the winding fill of `tris` on `spec`'s grid leaves every cell empty, by the module docs' test (false
+/// also when it cannot tell: a line crossed twice, a centre too near a triangle, or `progress` cancelled).
+pub(crate) fn fills_nothing(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> bool {
+    let axis = net_facing(tris, |_| true).abs().max_position();
+    let crossed = Crossed::new(spec, axis);
+    (0..tris.len()).into_par_iter().with_min_len(triangles_per_task(tris.len())).all(|t| {
+        let triangle = tris.get(t);
+        // Most triangles of a big model lie between the lines (their box, widened by NEAR, holds none): they
+        // cross none and come near no centre.
+        let (lo, hi) = (triangle[0].min(triangle[1]).min(triangle[2]), triangle[0].max(triangle[1]).max(triangle[2]));
+        let holds_lines = [(axis + 1) % 3, (axis + 2) % 3]
+            .iter()
+            .all(|&k| !column_range(lo[k] - NEAR, hi[k] + NEAR, spec.dims[k]).is_empty());
+        !holds_lines || !progress.is_cancelled() && crossed.mark(&triangle) && !centre_near(spec.dims, &triangle, axis)
+    })
+}
+
+/// Whether a cell centre of a grid of `dims` cells lies within [`NEAR`] of triangle `t` without the line along
+/// `axis` through it crossing `t` ([`covers_column`]). Near: within `NEAR` of its bounding box and of its plane
+/// (measured along the axis its normal is largest on, at every line of centres along it through the box); for a
+/// triangle without a normal, any centre in its box.
+fn centre_near(dims: [u32; 3], t: &GridTriangle, axis: usize) -> bool {
+    let (lo, hi) = (t[0].min(t[1]).min(t[2]) - NEAR, t[0].max(t[1]).max(t[2]) + NEAR);
+    let centres = |k: usize| column_range(lo[k], hi[k], dims[k]);
+    if (0..3).any(|k| centres(k).is_empty()) {
+        return false;
+    }
+    let normal = triangle_normal(t);
+    let length = normal.length();
+    if length == 0.0 {
+        return true;
+    }
+    let w = normal.abs().max_position();
+    let (u, v) = ((w + 1) % 3, (w + 2) % 3);
+    let along = centres(w);
+    let (first, last) = (f64::from(along.start) + 0.5, f64::from(along.end - 1) + 0.5);
+    centres(u).any(|a| {
+        centres(v).any(|b| {
+            let mut p = DVec3::ZERO;
+            (p[u], p[v]) = (f64::from(a) + 0.5, f64::from(b) + 0.5);
+            // Where the plane meets the line through (a, b) along w, and the centre on it nearest to that.
+            let at = t[0][w] - (normal[u] * (p[u] - t[0][u]) + normal[v] * (p[v] - t[0][v])) / normal[w];
+            p[w] = ((at - 0.5).round() + 0.5).clamp(first, last);
+            let line = cycled(p, axis);
+            (at - p[w]).abs() * normal[w].abs() <= NEAR * length
+                && !covers_column(&t.map(|c| cycled(c, axis)), [line.x, line.y])
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridSize;
+    use crate::shapes::cuboid;
+    use crate::soup::TriangleSoup;
+
+    /// Cells per side of the test grid.
+    const N: u32 = 8;
+
+    /// A grid of N × N × N cells.
+    fn grid() -> GridSpec {
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(N), 1.0, 1 << 20).unwrap();
+        assert_eq!(spec.dims, [N; 3]);
+        spec
+    }
+
+    /// A terrain over the whole grid facing up (+Y), 2 × 16 × 16 triangles; its height at (x, z) by `height`.
+    fn terrain(height: impl Fn(f64, f64) -> f64) -> Vec<GridTriangle> {
+        let at = |i: u32, k: u32| {
+            let (x, z) = (f64::from(i) / 2.0, f64::from(k) / 2.0);
+            DVec3::new(x, height(x, z), z)
+        };
+        (0..16)
+            .flat_map(|i| (0..16).map(move |k| (i, k)))
+            .flat_map(|(i, k)| [[at(i, k), at(i, k + 1), at(i + 1, k)], [at(i + 1, k), at(i, k + 1), at(i + 1, k + 1)]])
+            .collect()
+    }
+
+    fn hills(x: f64, z: f64) -> f64 {
+        4.0 + 1.7 * (0.9 * x).sin() * (0.7 * z).cos()
+    }
+
+    fn fills_nothing_of(tris: &[GridTriangle]) -> bool {
+        fills_nothing(&grid(), &GridTriangles::from_triangles(tris), &Progress::new())
+    }
+
+    /// A closed prism along Y (from y = 1 to 7) over the triangle `section` of the XZ plane, facing out.
+    fn prism(section: [[f64; 2]; 3]) -> Vec<GridTriangle> {
+        let at = |k: usize, y: f64| DVec3::new(section[k][0], y, section[k][1]);
+        let mut tris = vec![[at(0, 1.0), at(1, 1.0), at(2, 1.0)], [at(0, 7.0), at(2, 7.0), at(1, 7.0)]];
+        for k in 0..3 {
+            let next = (k + 1) % 3;
+            tris.push([at(k, 1.0), at(k, 7.0), at(next, 1.0)]);
+            tris.push([at(next, 1.0), at(k, 7.0), at(next, 7.0)]);
+        }
+        tris
+    }
+
+    #[test]
+    fn a_terrain_fills_nothing_but_not_with_a_part_under_it() {
+        let land = terrain(hills);
+        assert!(land.iter().all(|t| triangle_normal(t).y > 0.0), "the terrain faces up");
+        assert!(fills_nothing_of(&land));
+        // A box under the hills: the lines along Y through it cross it twice.
+        let block = cuboid([2.2, 0.2, 2.2], [5.8, 1.8, 5.8]);
+        let mut with_box = land.clone();
+        with_box
+            .extend(block.triangles.iter().map(|t| t.map(|i| DVec3::from(block.positions[i as usize].map(f64::from)))));
+        assert!(!fills_nothing_of(&with_box));
+    }
+
+    #[test]
+    fn a_centre_on_a_triangle_counts_only_where_its_line_crosses_the_triangle() {
+        // A floor through the centres at y = 3.5: the lines along Y cross it there.
+        let floor = [DVec3::new(-1.0, 3.5, -1.0), DVec3::new(-1.0, 3.5, 20.0), DVec3::new(20.0, 3.5, -1.0)];
+        assert!(fills_nothing_of(&[floor]));
+        // Made of a lattice of half-cell triangles, its corners fall on centres, and there every triangle but one
+        // meets the line beside it (the tie-break gives the centre to one): no decision, the parts decide.
+        assert!(!fills_nothing_of(&terrain(|_, _| 3.5)));
+        // A thin prism along Y beside the hills whose slanted face runs through the centres (4.5, y, 2.5): its lines
+        // along Y are edge-on to that face and the prism holds no centre, so no line crosses it twice, but the
+        // column count may put those centres inside it (its tie-break along Z and along Y push them to different
+        // sides of the face): no decision.
+        let on = prism([[4.0, 2.0], [5.0, 3.0], [4.9, 2.3]]);
+        let mut land = terrain(hills);
+        land.extend(&on);
+        assert!(!fills_nothing_of(&land));
+        // Moved a quarter of a cell along X, off every centre: nothing is filled, and the test says so.
+        let off = prism([[4.25, 2.0], [5.25, 3.0], [5.15, 2.3]]);
+        let mut land = terrain(hills);
+        land.extend(&off);
+        assert!(fills_nothing_of(&land));
+    }
+}
