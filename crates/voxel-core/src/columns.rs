@@ -4,7 +4,7 @@
 //! to decide the roles. The fill also rasterizes the parity triangles onto the columns along X and Y
 //! ([`crossings_along`]), the same way with the coordinates cycled.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicI32, Ordering};
 
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -184,10 +184,11 @@ pub(crate) fn cycled(p: DVec3, axis: usize) -> DVec3 {
     }
 }
 
-/// Calls `f(x, y)` for every column of an `nx` × `ny` grid of them whose centre triangle `t` covers
-/// ([`covers_column`], by rows: [`covered_run`]), and returns the triangle's [`projected_orientation`]; `None`
-/// (and no call) when no column centre lies under its extent or it is seen edge-on.
-fn covered_columns(t: &GridTriangle, nx: u32, ny: u32, mut f: impl FnMut(u32, u32)) -> Option<bool> {
+/// Calls `f(x, y, counter_clockwise)` for every column of an `nx` × `ny` grid of them whose centre triangle `t`
+/// covers ([`covers_column`], by rows: [`covered_run`]), `counter_clockwise` the triangle's
+/// [`projected_orientation`], which it returns; `None` (and no call) when no column centre lies under its extent
+/// or it is seen edge-on.
+fn covered_columns(t: &GridTriangle, nx: u32, ny: u32, mut f: impl FnMut(u32, u32, bool)) -> Option<bool> {
     let xs = column_range(t[0].x.min(t[1].x).min(t[2].x), t[0].x.max(t[1].x).max(t[2].x), nx);
     let ys = column_range(t[0].y.min(t[1].y).min(t[2].y), t[0].y.max(t[1].y).max(t[2].y), ny);
     if xs.is_empty() || ys.is_empty() {
@@ -196,37 +197,52 @@ fn covered_columns(t: &GridTriangle, nx: u32, ny: u32, mut f: impl FnMut(u32, u3
     let counter_clockwise = projected_orientation(t)?;
     for x in xs {
         for y in covered_run(t, counter_clockwise, f64::from(x) + 0.5, ys.clone()) {
-            f(x, y);
+            f(x, y, counter_clockwise);
         }
     }
     Some(counter_clockwise)
 }
 
-/// The columns along one axis (those of [`crossings_along`]) that some triangle crosses, marked triangle by
-/// triangle from any number of threads: for finding a column crossed twice.
-pub(crate) struct Crossed {
+/// A number per column along one axis (those of [`crossings_along`]), added to triangle by triangle from any
+/// number of threads: how many triangles cross each, or their steps.
+pub(crate) struct Tally {
     axis: usize,
     /// The columns' counts, `nx` × `ny`.
     dims: [u32; 2],
-    marked: Vec<AtomicBool>,
+    counts: Vec<AtomicI32>,
 }
 
-impl Crossed {
-    /// No column along `axis` of `spec`'s grid marked yet.
+impl Tally {
+    /// Zero in every column along `axis` of `spec`'s grid.
     pub(crate) fn new(spec: &GridSpec, axis: usize) -> Self {
         let dims = [spec.dims[(axis + 1) % 3], spec.dims[(axis + 2) % 3]];
-        Self { axis, dims, marked: (0..dims[0] as usize * dims[1] as usize).map(|_| AtomicBool::new(false)).collect() }
+        Self { axis, dims, counts: (0..dims[0] as usize * dims[1] as usize).map(|_| AtomicI32::new(0)).collect() }
     }
 
-    /// Marks the columns that triangle `t` (grid coordinates) crosses; false when one of them was marked
-    /// already (by another triangle).
-    pub(crate) fn mark(&self, t: &GridTriangle) -> bool {
-        let t = &t.map(|c| cycled(c, self.axis));
-        let mut again = false;
-        covered_columns(t, self.dims[0], self.dims[1], |x, y| {
-            again |= self.marked[(x * self.dims[1] + y) as usize].swap(true, Ordering::Relaxed);
+    /// Adds `f(orientation)` to every column that triangle `t` (grid coordinates) crosses, `orientation` its
+    /// [`projected_orientation`] along the axis; true when one of those columns held a number other than zero.
+    fn add(&self, t: &GridTriangle, f: impl Fn(bool) -> i32) -> bool {
+        let mut held = false;
+        covered_columns(&t.map(|c| cycled(c, self.axis)), self.dims[0], self.dims[1], |x, y, counter_clockwise| {
+            let count = &self.counts[(x * self.dims[1] + y) as usize];
+            held |= count.fetch_add(f(counter_clockwise), Ordering::Relaxed) != 0;
         });
-        !again
+        held
+    }
+
+    /// Counts the columns that triangle `t` crosses; false when one of them was crossed before (by another triangle).
+    pub(crate) fn cross(&self, t: &GridTriangle) -> bool {
+        !self.add(t, |_| 1)
+    }
+
+    /// Adds triangle `t`'s steps as it faces in the file ([`Role::facing`]) to the columns it crosses.
+    pub(crate) fn step(&self, t: &GridTriangle) {
+        self.add(t, |up| Role::facing(up).step());
+    }
+
+    /// Whether some column's number is not zero (for steps: the file's facing does not balance it).
+    pub(crate) fn any(&self) -> bool {
+        self.counts.iter().any(|c| c.load(Ordering::Relaxed) != 0)
     }
 }
 
@@ -264,7 +280,7 @@ pub(crate) fn crossings_along<const AXIS: usize>(
                     continue;
                 }
                 let (t, triangle) = (&tris.get(index).map(|c| cycled(c, AXIS)), index as u32);
-                let covered = covered_columns(t, nx, ny, |x, y| {
+                let covered = covered_columns(t, nx, ny, |x, y, _| {
                     let z = depth_at(t, [f64::from(x) + 0.5, f64::from(y) + 0.5]);
                     out.push(Crossing { column: x * ny + y, triangle, z });
                 });

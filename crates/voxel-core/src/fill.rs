@@ -48,7 +48,7 @@ use crate::options::{FillMode, Method};
 use crate::orient::{closed_parts, winding_roles};
 use crate::progress::Progress;
 use crate::soup::TriangleSoup;
-use height_field::{fills_nothing, net_facing};
+use height_field::{net_facing, survey};
 
 /// Calls `emit` with the runs of cells of one column that are inside by the column count of the module
 /// docs: cell k is inside when W + P ≠ 0 for the crossings at or below its centre k + 0.5. Each run comes with
@@ -154,6 +154,11 @@ pub(crate) fn solid_fill(
     bvh: &OnceLock<TriangleBvh>,
     progress: &Progress,
 ) -> BitGrid {
+    // The reference decides every cell by itself.
+    let survey = (fill == FillMode::Winding && method != Method::Reference).then(|| survey(spec, tris, progress));
+    if survey.is_some_and(|s| s.fills_nothing()) {
+        return BitGrid::new(spec.cell_count());
+    }
     let columns = match method {
         Method::Fast => Some(crossings_by_rasterizing(spec, tris, progress)),
         Method::Bvh => Some(crossings_by_bvh(spec, tris, bvh.get_or_init(|| TriangleBvh::build(tris)))),
@@ -166,8 +171,7 @@ pub(crate) fn solid_fill(
         FillMode::Winding => winding_roles(
             columns.as_ref(),
             || crossings_by_rasterizing(spec, tris, progress),
-            // The reference decides every cell by itself.
-            || method != Method::Reference && fills_nothing(spec, tris, progress),
+            || survey.is_some_and(|s| s.lines_once),
             || closed_parts(soup, tris),
         ),
         _ => Some(vec![Role::Parity; tris.len()]),

@@ -31,38 +31,75 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::columns::{Crossed, column_range, cycled, triangles_per_task};
+use crate::columns::{Tally, column_range, cycled, triangles_per_task};
 use crate::geom::{GridTriangle, covers_column, triangle_normal};
 use crate::grid::{GridSpec, GridTriangles};
 use crate::progress::Progress;
 
-/// Triangles sampled by [`net_facing`]: every this many.
-const FACING_SAMPLE: usize = 16;
+/// The most triangles [`net_facing`] samples (about).
+const FACING_SAMPLE: usize = 1 << 16;
 
-/// The sum of the normals (twice the areas, signed by facing) of the triangles `keep` accepts among every
-/// [`FACING_SAMPLE`]th: which way they face most (only an order of work depends on it).
+/// The sum of the normals (twice the areas, signed by facing) of the triangles `keep` accepts, of all of them or,
+/// in a big model, of an evenly spread sample of about [`FACING_SAMPLE`]: which way they face most (only an order
+/// of work and whether the survey finds a height field depend on it, not the fill).
 pub(super) fn net_facing(tris: &GridTriangles, keep: impl Fn(usize) -> bool) -> DVec3 {
-    (0..tris.len()).step_by(FACING_SAMPLE).filter(|&t| keep(t)).map(|t| triangle_normal(&tris.get(t))).sum()
+    let every = tris.len().div_ceil(FACING_SAMPLE).max(1);
+    (0..tris.len()).step_by(every).filter(|&t| keep(t)).map(|t| triangle_normal(&tris.get(t))).sum()
 }
 
 /// How near (in cells) a cell centre may come to a triangle for [`fills_nothing`] to decide: far above the
 /// rounding of a crossing's depth (about 10⁻¹² of a cell on a grid of 2048).
 const NEAR: f64 = 1e-9;
 
-/// Whether the winding fill of `tris` on `spec`'s grid leaves every cell empty, by the module docs' test (false
-/// also when it cannot tell: a line crossed twice, a centre too near a triangle, or `progress` cancelled).
-pub(crate) fn fills_nothing(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> bool {
+/// What one pass over the triangles tells the winding fill before it counts any crossing (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Survey {
+    /// No line along the axis the triangles face most crosses two of them, and every triangle near a centre is
+    /// crossed by that centre's line: the fill is empty where the file's facing does not balance the columns.
+    pub lines_once: bool,
+    /// With `lines_once`: the file's facing does not balance some +Z column (its steps do not add up to zero).
+    pub unbalanced: bool,
+}
+
+impl Survey {
+    /// Whether the winding fill is surely empty, before any crossing is counted.
+    pub(crate) fn fills_nothing(self) -> bool {
+        self.lines_once && self.unbalanced
+    }
+}
+
+/// Surveys `tris` on `spec`'s grid (the module docs' test; `lines_once` false also once `progress` is cancelled):
+/// one parallel pass that stops at the first line crossed twice or near miss, and adds up the file's steps in the
+/// +Z columns as it goes.
+pub(crate) fn survey(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Survey {
     let axis = net_facing(tris, |_| true).abs().max_position();
-    let crossed = Crossed::new(spec, axis);
-    (0..tris.len()).into_par_iter().with_min_len(triangles_per_task(tris.len())).all(|t| {
+    let (lines, columns) = (Tally::new(spec, axis), Tally::new(spec, 2));
+    let lines_once = (0..tris.len()).into_par_iter().with_min_len(triangles_per_task(tris.len())).all(|t| {
         let triangle = tris.get(t);
-        // Most triangles of a big model lie between the lines (their box, widened by NEAR, holds none): they
-        // cross none and come near no centre.
         let (lo, hi) = (triangle[0].min(triangle[1]).min(triangle[2]), triangle[0].max(triangle[1]).max(triangle[2]));
-        let holds_lines = [(axis + 1) % 3, (axis + 2) % 3]
-            .iter()
-            .all(|&k| !column_range(lo[k] - NEAR, hi[k] + NEAR, spec.dims[k]).is_empty());
-        !holds_lines || !progress.is_cancelled() && crossed.mark(&triangle) && !centre_near(spec.dims, &triangle, axis)
+        // Most triangles of a big model lie between the lines (their box holds none, widened by NEAR for the lines
+        // along the axis): they cross none and come near no centre.
+        if meets_lines(spec.dims, lo, hi, 2) {
+            columns.step(&triangle);
+        }
+        !meets_lines(spec.dims, lo - NEAR, hi + NEAR, axis)
+            || !progress.is_cancelled() && lines.cross(&triangle) && !centre_near(spec.dims, &triangle, axis)
+    });
+    Survey { lines_once, unbalanced: lines_once && columns.any() }
+}
+
+/// Whether the box [lo, hi] may hold a line along `axis` through the centres of a grid of `dims` cells: never
+/// false when it does (a quick filter before the exact tests: a whole-number cast in place of rounding's branches,
+/// which only widens the box by a rounding).
+fn meets_lines(dims: [u32; 3], lo: DVec3, hi: DVec3, axis: usize) -> bool {
+    [(axis + 1) % 3, (axis + 2) % 3].into_iter().all(|k| {
+        let n = i64::from(dims[k]);
+        let shift = (n + 3) as f64;
+        // The floor of x within ±(n + 1) (beyond, the answer does not change): the cast truncates a positive
+        // number; the shift's rounding can only raise a floor.
+        let floor = |x: f64| (x.clamp(2.0 - shift, shift - 2.0) + shift) as i64 - (n + 3);
+        let (first, last) = (-floor(0.5 - lo[k]), floor(hi[k] - 0.5));
+        first.max(0) <= last.min(n - 1)
     })
 }
 
@@ -133,8 +170,9 @@ mod tests {
         4.0 + 1.7 * (0.9 * x).sin() * (0.7 * z).cos()
     }
 
-    fn fills_nothing_of(tris: &[GridTriangle]) -> bool {
-        fills_nothing(&grid(), &GridTriangles::from_triangles(tris), &Progress::new())
+    /// Whether the survey finds that no line crosses two of `tris` (and no near miss).
+    fn lines_once(tris: &[GridTriangle]) -> bool {
+        survey(&grid(), &GridTriangles::from_triangles(tris), &Progress::new()).lines_once
     }
 
     /// A closed prism along Y (from y = 1 to 7) over the triangle `section` of the XZ plane, facing out.
@@ -153,23 +191,23 @@ mod tests {
     fn a_terrain_fills_nothing_but_not_with_a_part_under_it() {
         let land = terrain(hills);
         assert!(land.iter().all(|t| triangle_normal(t).y > 0.0), "the terrain faces up");
-        assert!(fills_nothing_of(&land));
+        assert!(lines_once(&land));
         // A box under the hills: the lines along Y through it cross it twice.
         let block = cuboid([2.2, 0.2, 2.2], [5.8, 1.8, 5.8]);
         let mut with_box = land.clone();
         with_box
             .extend(block.triangles.iter().map(|t| t.map(|i| DVec3::from(block.positions[i as usize].map(f64::from)))));
-        assert!(!fills_nothing_of(&with_box));
+        assert!(!lines_once(&with_box));
     }
 
     #[test]
     fn a_centre_on_a_triangle_counts_only_where_its_line_crosses_the_triangle() {
         // A floor through the centres at y = 3.5: the lines along Y cross it there.
         let floor = [DVec3::new(-1.0, 3.5, -1.0), DVec3::new(-1.0, 3.5, 20.0), DVec3::new(20.0, 3.5, -1.0)];
-        assert!(fills_nothing_of(&[floor]));
+        assert!(lines_once(&[floor]));
         // Made of a lattice of half-cell triangles, its corners fall on centres, and there every triangle but one
         // meets the line beside it (the tie-break gives the centre to one): no decision, the parts decide.
-        assert!(!fills_nothing_of(&terrain(|_, _| 3.5)));
+        assert!(!lines_once(&terrain(|_, _| 3.5)));
         // A thin prism along Y beside the hills whose slanted face runs through the centres (4.5, y, 2.5): its lines
         // along Y are edge-on to that face and the prism holds no centre, so no line crosses it twice, but the
         // column count may put those centres inside it (its tie-break along Z and along Y push them to different
@@ -177,11 +215,63 @@ mod tests {
         let on = prism([[4.0, 2.0], [5.0, 3.0], [4.9, 2.3]]);
         let mut land = terrain(hills);
         land.extend(&on);
-        assert!(!fills_nothing_of(&land));
+        assert!(!lines_once(&land));
         // Moved a quarter of a cell along X, off every centre: nothing is filled, and the test says so.
         let off = prism([[4.25, 2.0], [5.25, 3.0], [5.15, 2.3]]);
         let mut land = terrain(hills);
         land.extend(&off);
-        assert!(fills_nothing_of(&land));
+        assert!(lines_once(&land));
+    }
+
+    #[test]
+    fn a_tray_fills_nothing_but_a_tube_balanced_as_in_the_file_is_left_to_the_columns() {
+        // A box without its top, facing out: every line along Z crosses its bottom once, and the file's facing
+        // leaves those columns entering (+1) without leaving.
+        let mut tray = cuboid([1.2, 1.2, 1.2], [6.8, 6.8, 6.8]);
+        tray.triangles.truncate(10);
+        let tris: Vec<GridTriangle> =
+            tray.triangles.iter().map(|t| t.map(|i| DVec3::from(tray.positions[i as usize].map(f64::from)))).collect();
+        let tray_survey = survey(&grid(), &GridTriangles::from_triangles(&tris), &Progress::new());
+        assert_eq!(tray_survey, Survey { lines_once: true, unbalanced: true });
+        assert!(tray_survey.fills_nothing());
+        // A tube along X facing out, without caps: its lines along X cross nothing, but it crosses every +Z column
+        // through it twice, entering and leaving: the file's facing balances them and fills its bore, which the
+        // survey must not call empty.
+        let ring = |k: u32, x: f64| {
+            let a = std::f64::consts::TAU * f64::from(k % 16) / 16.0;
+            DVec3::new(x, 4.0 + 2.1 * a.cos(), 4.0 + 2.1 * a.sin())
+        };
+        let tube: Vec<GridTriangle> = (0..16)
+            .flat_map(|k| {
+                [[ring(k, 1.3), ring(k + 1, 1.3), ring(k, 6.7)], [ring(k + 1, 1.3), ring(k + 1, 6.7), ring(k, 6.7)]]
+            })
+            .collect();
+        assert!(tube.iter().all(|t| triangle_normal(t).dot(t[0] - DVec3::new(t[0].x, 4.0, 4.0)) > 0.0), "facing out");
+        let tube_survey = survey(&grid(), &GridTriangles::from_triangles(&tube), &Progress::new());
+        assert!(!tube_survey.unbalanced && !tube_survey.fills_nothing(), "{tube_survey:?}");
+    }
+
+    #[test]
+    fn the_quick_filter_never_misses_a_line() {
+        let dims = [N; 3];
+        let mut random = crate::lcg::Lcg::new(3);
+        let (mut met, mut missed) = (0, 0);
+        for _ in 0..200_000 {
+            // Ends on a lattice of eighths, some nudged by a rounding, some beyond the grid.
+            let mut end = |nudge: f64| (random.below(96) as f64 / 8.0 - 2.0) + nudge * (random.below(3) as f64 - 1.0);
+            let (a, b) = (end(1e-15), end(1e-15));
+            let (lo, hi) = (DVec3::new(a.min(b), 3.5, 0.0), DVec3::new(a.max(b), 3.5, 0.0));
+            let exact = !column_range(lo.x, hi.x, N).is_empty();
+            let quick = meets_lines(dims, lo, hi, 2);
+            assert!(quick || !exact, "{lo} {hi}");
+            met += usize::from(quick);
+            missed += usize::from(!quick);
+            // Away from the half cells it is exact.
+            let off_half = |x: f64| ((2.0 * x).round() - 2.0 * x).abs() > 1e-9;
+            if off_half(lo.x) && off_half(hi.x) {
+                assert_eq!(quick, exact, "{lo} {hi}");
+            }
+        }
+        assert!(met > 100_000 && missed > 10_000, "{met} {missed}");
     }
 }
