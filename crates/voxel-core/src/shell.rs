@@ -42,6 +42,10 @@ impl Shell {
     // leaves empty need it, far fewer than the overlaps at the default grid (measured: docs/benchmarks.md).
     #[inline(never)]
     pub fn thin_cells(&self, spec: &GridSpec, tris: &GridTriangles, fill: &BitGrid) -> Vec<u32> {
+        if fill.count() == 0 {
+            // Every neighbour is empty: every cell is thin (a terrain's, whose fill is empty).
+            return self.cells.clone();
+        }
         let thin = |k: usize| {
             let index = self.cells[k] as usize;
             if fill.get(index) {
