@@ -143,7 +143,9 @@ fn fill_columns(spec: &GridSpec, columns: &Columns, roles: &[Role], apart: bool)
 /// The solid by the column count, with the roles of `fill` (winding or parity) and the crossings of
 /// `method`; `tris` are `soup`'s triangles on the grid `spec`. Under the winding rule, cells inside by parity
 /// alone (the sheets that cannot be closed) stay inside only where the parity triangles enclose them along X
-/// and Y too ([`keep_enclosed`]). Once `progress` is cancelled it stops after the crossings (cut short too)
+/// and Y too ([`keep_enclosed`]). The winding rule's fast methods first survey the triangles
+/// ([`height_field::survey`]): a model that no line along some axis crosses twice fills nothing, found without
+/// the crossings or the part analysis. Once `progress` is cancelled it stops after the crossings (cut short too)
 /// with an empty solid.
 pub(crate) fn solid_fill(
     soup: &TriangleSoup,

@@ -249,7 +249,7 @@ fn check_clip(clips: &[ClipInfo], clip: usize) -> Result<()> {
     }
 }
 
-/// Linear-blend skinning in place: each position becomes Σ wᵢ · joint[jᵢ] · p / Σ wᵢ (weights that do not
+/// Linear-blend skinning in place: each position becomes Σ wᵢ · joint\[jᵢ\] · p / Σ wᵢ (weights that do not
 /// sum to 1 are normalized); vertices without weight follow `node` (their node's global transform).
 fn skin_positions(positions: &mut [Vec3], influences: &Influences, joints: &[Mat4], node: Mat4) {
     let k = influences.per_vertex;

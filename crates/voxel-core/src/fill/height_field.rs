@@ -4,7 +4,7 @@
 //! # Why nothing is filled
 //!
 //! Say that every line along axis A through the cell centres crosses at most one triangle (the rasterizer's
-//! exact test, [`crate::columns::Crossed`]), and that every triangle within [`NEAR`] of a cell centre is crossed
+//! exact test, [`crate::columns::Tally`]), and that every triangle within [`NEAR`] of a cell centre is crossed
 //! by the line along A through that centre. The test runs only where the file's own facing does not balance the
 //! columns ([`crate::orient::winding_roles`]; an open sheet that does, counts as it faces), so the roles come from
 //! the parts: closed, oriented surfaces count by winding, the rest by parity. A cell is filled by the column count
@@ -47,7 +47,7 @@ pub(super) fn net_facing(tris: &GridTriangles, keep: impl Fn(usize) -> bool) -> 
     (0..tris.len()).step_by(every).filter(|&t| keep(t)).map(|t| triangle_normal(&tris.get(t))).sum()
 }
 
-/// How near (in cells) a cell centre may come to a triangle for [`fills_nothing`] to decide: far above the
+/// How near (in cells) a cell centre may come to a triangle for [`survey`] to decide: far above the
 /// rounding of a crossing's depth (about 10⁻¹² of a cell on a grid of 2048).
 const NEAR: f64 = 1e-9;
 
@@ -123,10 +123,10 @@ fn holds_centre(lo: f64, hi: f64, n: u32) -> bool {
 /// triangle without a normal, any centre in its box.
 fn centre_near(dims: [u32; 3], t: &GridTriangle, axis: usize) -> bool {
     let (lo, hi) = (t[0].min(t[1]).min(t[2]) - NEAR, t[0].max(t[1]).max(t[2]) + NEAR);
-    let centres = |k: usize| column_range(lo[k], hi[k], dims[k]);
-    if (0..3).any(|k| centres(k).is_empty()) {
+    if (0..3).any(|k| !holds_centre(lo[k], hi[k], dims[k])) {
         return false;
     }
+    let centres = |k: usize| column_range(lo[k], hi[k], dims[k]);
     let normal = triangle_normal(t);
     let length = normal.length();
     if length == 0.0 {
