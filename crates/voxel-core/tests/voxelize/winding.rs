@@ -299,3 +299,119 @@ fn a_box_closed_only_through_a_t_junction_fills_as_the_closed_box() {
         assert_eq!(run(&junction), box_cells, "{method:?}");
     }
 }
+
+/// A random number below `n` from the state `seed` (a 64-bit LCG, high bits).
+fn next_below(seed: &mut u64, n: u64) -> u64 {
+    *seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+    (*seed >> 33) % n
+}
+
+/// A terrain over [0, 8]² in X and Z: 9 × 9 vertices at whole x and z, heights on a lattice of quarters between 2
+/// and 6 raised by `lift` (with none, cell centres fall on its quads' diagonals: the centres' lines run through
+/// them), facing up or down.
+fn lattice_terrain(seed: &mut u64, lift: f32, down: bool) -> IndexedMesh {
+    let mut mesh = IndexedMesh { positions: Vec::new(), triangles: Vec::new() };
+    for i in 0..9u32 {
+        for k in 0..9u32 {
+            mesh.positions.push([i as f32, 2.0 + lift + next_below(seed, 17) as f32 / 4.0, k as f32]);
+        }
+    }
+    let at = |i: u32, k: u32| i * 9 + k;
+    for (i, k) in (0..8).flat_map(|i| (0..8).map(move |k| (i, k))) {
+        mesh.triangles.push([at(i, k), at(i, k + 1), at(i + 1, k)]);
+        mesh.triangles.push([at(i + 1, k), at(i, k + 1), at(i + 1, k + 1)]);
+    }
+    if down { reversed(mesh) } else { mesh }
+}
+
+#[test]
+fn terrains_and_parts_on_a_lattice_fill_alike_by_every_method() {
+    // Terrains, alone or with a box (on a lattice of quarters, under, across or above them, facing either way):
+    // the fast fill, which surveys the triangles first and may find the fill empty without the parts (a line
+    // along the terrain's up axis crossed at most once), agrees with the BVH's and the reference's cell for cell,
+    // ties included: the grid is the lattice's (whole cells), so centres lie on faces, edges and corners.
+    let bounds = ([0.0; 3], [8.0; 3]);
+    let fill_only = |method| VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(8) };
+    let (mut empty, mut filled) = (0, 0);
+    let mut seed = 17;
+    for case in 0..240 {
+        let mut mesh = lattice_terrain(&mut seed, [0.0, 0.0625][case % 5 / 3], case % 2 == 1);
+        if case % 3 != 0 {
+            let mut corner = || std::array::from_fn::<f32, 3, _>(|_| 0.25 + next_below(&mut seed, 31) as f32 / 4.0);
+            let (a, b) = (corner(), corner());
+            let (lo, hi) = (std::array::from_fn(|k| a[k].min(b[k])), std::array::from_fn(|k| a[k].max(b[k]) + 0.25));
+            let block = cuboid(lo, hi);
+            mesh = merged(mesh, &if case % 4 == 1 { reversed(block) } else { block });
+        }
+        let soup = TriangleSoup::from_mesh(&mesh, WHITE);
+        let run = |method| cells(&voxel_core::voxelize_within(&soup, &fill_only(method), bounds).unwrap());
+        let fast = run(Method::Fast);
+        assert_eq!(fast, run(Method::Reference), "case {case}: fast and reference");
+        assert_eq!(fast, run(Method::Bvh), "case {case}: fast and BVH");
+        if fast.is_empty() { empty += 1 } else { filled += 1 }
+    }
+    // The grid is the lattice's: a corner of the terrain lands on its own coordinates.
+    let terrain = TriangleSoup::from_mesh(&lattice_terrain(&mut seed, 0.0, false), WHITE);
+    let spec = voxel_core::voxelize_within(&terrain, &fill_only(Method::Fast), bounds).unwrap().spec;
+    assert_eq!(spec.to_grid([1.0, 2.25, 3.0]).to_array(), [1.0, 2.25, 3.0]);
+    assert!(empty > 40 && filled > 40, "{empty} empty, {filled} filled");
+}
+
+#[test]
+fn a_thin_part_whose_face_runs_through_centres_is_filled_by_its_ties_as_the_reference_fills_it() {
+    // A wall leaning a little (normal (1, 0, 0.3)), so that the lines along X cross it once and the +Z columns do
+    // not balance; and a thin closed prism along X whose slanted face (normal ±(0, 1, −1)) runs through the
+    // centres (x, 4.5, 4.5), its inside on the side the +Z column's tie-break puts those centres (a crossing at a
+    // centre's height counts below it). The lines along X through those centres are tipped the other way by their
+    // own tie-break and cross nothing but the wall, so no line crosses two triangles; only the survey's look at the
+    // triangles near the centres keeps it from calling the fill empty.
+    let wall = IndexedMesh {
+        positions: vec![[7.2, 0.0, 0.0], [7.2, 8.0, 0.0], [4.8, 0.0, 8.0], [4.8, 8.0, 8.0]],
+        triangles: vec![[0, 1, 2], [2, 1, 3]],
+    };
+    let section = [[4.0f32, 4.0], [5.0, 5.0], [4.3, 4.9]];
+    let at = |k: usize, x: f32| [x, section[k][0], section[k][1]];
+    let mut prism = IndexedMesh { positions: Vec::new(), triangles: vec![[0, 1, 2], [3, 5, 4]] };
+    prism.positions.extend((0..3).map(|k| at(k, 1.25)));
+    prism.positions.extend((0..3).map(|k| at(k, 2.75)));
+    for k in 0..3u32 {
+        let next = (k + 1) % 3;
+        prism.triangles.push([k, next, k + 3]);
+        prism.triangles.push([next, next + 3, k + 3]);
+    }
+    let soup = TriangleSoup::from_mesh(&merged(wall, &prism), WHITE);
+    let fill_only = |method| VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(8) };
+    let run = |method| cells(&voxel_core::voxelize_within(&soup, &fill_only(method), ([0.0; 3], [8.0; 3])).unwrap());
+    let reference = run(Method::Reference);
+    assert_eq!(reference, [1, 2].map(|x| [x, 4, 4]).into_iter().collect::<HashSet<_>>(), "the centres on the face");
+    assert_eq!(run(Method::Fast), reference);
+    assert_eq!(run(Method::Bvh), reference);
+}
+
+#[test]
+fn an_open_tube_that_balances_its_columns_as_it_faces_is_not_taken_for_a_height_field() {
+    // A wall facing +X (the lines along X cross it once) beside an open tube along X facing out, which those lines
+    // do not cross at all: no line along X crosses two triangles. But every +Z column through the tube enters and
+    // leaves it as the file faces, so the file's facing stands and fills the tube's bore; the survey must see the
+    // columns balance.
+    let mut mesh = IndexedMesh {
+        positions: vec![[6.25, 0.0, 0.0], [6.25, 8.0, 0.0], [6.25, 0.0, 8.0], [6.25, 8.0, 8.0]],
+        triangles: vec![[0, 1, 2], [2, 1, 3]],
+    };
+    let ring = |k: u32, x: f32| {
+        let a = std::f32::consts::TAU * (k % 16) as f32 / 16.0;
+        [x, 4.2 + 2.1 * a.cos(), 4.1 + 2.1 * a.sin()]
+    };
+    for k in 0..16 {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([ring(k, 1.25), ring(k + 1, 1.25), ring(k, 4.75), ring(k + 1, 4.75)]);
+        mesh.triangles.extend([[base, base + 1, base + 2], [base + 1, base + 3, base + 2]]);
+    }
+    let soup = TriangleSoup::from_mesh(&mesh, WHITE);
+    let fill_only = |method| VoxelizeOptions { method, shell: ShellMode::None, ..at_resolution(8) };
+    let run = |method| cells(&voxel_core::voxelize_within(&soup, &fill_only(method), ([0.0; 3], [8.0; 3])).unwrap());
+    let reference = run(Method::Reference);
+    assert!(reference.len() >= 3 * 9, "the bore: {}", reference.len());
+    assert_eq!(run(Method::Fast), reference);
+    assert_eq!(run(Method::Bvh), reference);
+}
