@@ -223,9 +223,10 @@ mod tests {
         // meets the line beside it (the tie-break gives the centre to one): no decision, the parts decide.
         assert!(!lines_once(&terrain(|_, _| 3.5)));
         // A thin prism along Y beside the hills whose slanted face runs through the centres (4.5, y, 2.5): its lines
-        // along Y are edge-on to that face and the prism holds no centre, so no line crosses it twice, but the
-        // column count may put those centres inside it (its tie-break along Z and along Y push them to different
-        // sides of the face): no decision.
+        // along Y are edge-on to that face and the prism holds no centre, so no line crosses it twice, but those
+        // centres lie on a face their lines miss: no decision (where the tie-breaks of the +Z columns and of the
+        // lines put such centres on different sides of the face, the columns fill them: see
+        // `a_thin_part_whose_face_runs_through_centres…` in tests/voxelize/winding.rs).
         let on = prism([[4.0, 2.0], [5.0, 3.0], [4.9, 2.3]]);
         let mut land = terrain(hills);
         land.extend(&on);
