@@ -135,27 +135,32 @@ pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicB
 /// a hint for starting that analysis before the grid exists: the fill itself decides by its columns
 /// ([`winding_roles`]).
 fn parts_likely_needed(soup: &TriangleSoup) -> bool {
-    // Along Z from every triangle (a closed surface's cancel only in the sum of all), along every axis from a
-    // sample of about 2¹⁶, evenly spread (a sheet facing one way does so in any sample; a closed surface does not).
-    let every = soup.triangle_count().div_ceil(1 << 16).max(1);
-    let (mut net_z, mut total_z) = (0.0f64, 0.0f64);
-    let (mut net, mut total) = (DVec3::ZERO, DVec3::ZERO);
-    for t in 0..soup.triangle_count() {
+    // Differences of nearby f32 coordinates are exact; their products are exact in f64.
+    let twice_areas = |t: usize| {
         let [a, b, c] = soup.triangle_positions(t);
-        // Differences of nearby f32 coordinates are exact; their products are exact in f64.
         let d = |p: [f32; 3]| DVec3::from(std::array::from_fn::<f64, 3, _>(|k| f64::from(p[k] - a[k])));
-        let (u, v) = (d(b), d(c));
-        let twice_area = u.x * v.y - u.y * v.x;
+        d(b).cross(d(c))
+    };
+    // Facing one way: from a sample of about 2¹⁶, evenly spread (a sheet facing one way does so in any sample; a
+    // closed surface does not), first, as it settles a terrain at once.
+    let every = soup.triangle_count().div_ceil(1 << 16).max(1);
+    let (mut net, mut total) = (DVec3::ZERO, DVec3::ZERO);
+    for t in (0..soup.triangle_count()).step_by(every) {
+        let twice = twice_areas(t);
+        net += twice;
+        total += twice.abs();
+    }
+    if (0..3).any(|k| total[k] > 0.0 && net[k].abs() >= (1.0 - 1e-3) * total[k]) {
+        return false;
+    }
+    // Along Z from every triangle: a closed surface's cancel only in the sum of all.
+    let (mut net_z, mut total_z) = (0.0f64, 0.0f64);
+    for t in 0..soup.triangle_count() {
+        let twice_area = twice_areas(t).z;
         net_z += twice_area;
         total_z += twice_area.abs();
-        if t % every == 0 {
-            let twice_areas = u.cross(v);
-            net += twice_areas;
-            total += twice_areas.abs();
-        }
     }
-    let one_way = (0..3).any(|k| total[k] > 0.0 && net[k].abs() >= (1.0 - 1e-3) * total[k]);
-    net_z.abs() > 1e-5 * total_z && !one_way
+    net_z.abs() > 1e-5 * total_z
 }
 
 /// Whether the triangles as they face in the file already wind consistently as far as any column can
