@@ -5,10 +5,11 @@
 //!
 //! Say that every line along axis A through the cell centres crosses at most one triangle (the rasterizer's
 //! exact test, [`crate::columns::Tally`]), and that every triangle within [`NEAR`] of a cell centre is crossed
-//! by the line along A through that centre. The test runs only where the file's own facing does not balance the
-//! columns ([`crate::orient::winding_roles`]; an open sheet that does, counts as it faces), so the roles come from
-//! the parts: closed, oriented surfaces count by winding, the rest by parity. A cell is filled by the column count
-//! ([`crate::fill`]) in one of two ways, and neither can happen:
+//! by the line along A through that centre. The fill is declared empty only where the file's own facing does not
+//! balance the +Z columns (some column's steps, added up in the same pass, do not come to zero; or the fill's own
+//! check of the columns finds so: [`crate::orient::winding_roles`]; an open sheet that balances them counts as it
+//! faces), so the roles come from the parts: closed, oriented surfaces count by winding, the rest by parity. A cell
+//! is filled by the column count ([`crate::fill`]) in one of two ways, and neither can happen:
 //!
 //! * **Inside by parity alone** (W = 0, P = 1): the parity triangles must put it inside along X, Y and Z alike,
 //!   and a line with an odd number of parity crossings, or with none, encloses nothing. Along A a line has at
