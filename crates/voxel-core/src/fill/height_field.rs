@@ -79,8 +79,10 @@ pub(crate) fn survey(spec: &GridSpec, tris: &GridTriangles, progress: &Progress)
         let triangle = tris.get(t);
         // Most triangles of a big model lie between the lines (their box, widened by NEAR, holds no centre's
         // coordinate along one of the two axes across the lines): they cross none and come near no centre.
-        let (lo, hi) = (triangle[0].min(triangle[1]).min(triangle[2]), triangle[0].max(triangle[1]).max(triangle[2]));
-        let holds = |k: usize| holds_centre(lo[k] - NEAR, hi[k] + NEAR, spec.dims[k]);
+        let holds = |k: usize| {
+            let [a, b, c] = triangle.map(|corner| corner[k]);
+            holds_centre(a.min(b).min(c) - NEAR, a.max(b).max(c) + NEAR, spec.dims[k])
+        };
         // The +Z columns lie across X and Y, the lines along the axis across the two others; one axis is in both
         // pairs, and where the box holds no centre's coordinate along it, the triangle crosses no line of either.
         let shared = usize::from(axis == 0);
