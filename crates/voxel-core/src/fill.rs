@@ -157,8 +157,8 @@ pub(crate) fn solid_fill(
     progress: &Progress,
 ) -> BitGrid {
     // The reference decides every cell by itself.
-    let survey = (fill == FillMode::Winding && method != Method::Reference).then(|| survey(spec, tris, progress));
-    if survey.is_some_and(|s| s.fills_nothing()) {
+    let surveyed = (fill == FillMode::Winding && method != Method::Reference).then(|| survey(spec, tris, progress));
+    if surveyed.is_some_and(|s| s.fills_nothing()) {
         return BitGrid::new(spec.cell_count());
     }
     let columns = match method {
@@ -173,7 +173,7 @@ pub(crate) fn solid_fill(
         FillMode::Winding => winding_roles(
             columns.as_ref(),
             || crossings_by_rasterizing(spec, tris, progress),
-            || survey.is_some_and(|s| s.lines_once),
+            || surveyed.is_some_and(|s| s.lines_once),
             || closed_parts(soup, tris),
         ),
         _ => Some(vec![Role::Parity; tris.len()]),

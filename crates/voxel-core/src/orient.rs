@@ -116,7 +116,7 @@ pub(crate) fn winding_roles(
 /// this beside work that does not (the grid's set-up), unless that work is already over (`settled`: then the
 /// fill has run the analysis itself if it needed it). A soup that the hint misses is analysed when its columns
 /// show the need, as before.
-pub(crate) fn analyse_parts_if_unbalanced(soup: &TriangleSoup, settled: &AtomicBool) {
+pub(crate) fn analyse_parts_ahead(soup: &TriangleSoup, settled: &AtomicBool) {
     // `settled` is asked again after the hint's pass over the triangles.
     let over = || settled.load(Ordering::Relaxed);
     if !over() && !SoupParts::kept(soup) && parts_likely_needed(soup) && !over() {
@@ -321,7 +321,7 @@ mod tests {
         use crate::voxelize::voxelize;
         let analysed_ahead = |mesh: &IndexedMesh| {
             let soup = TriangleSoup::from_mesh(mesh, [1.0; 4]);
-            analyse_parts_if_unbalanced(&soup, &AtomicBool::new(false));
+            analyse_parts_ahead(&soup, &AtomicBool::new(false));
             SoupParts::kept(&soup)
         };
         // A closed box: nothing to analyse ahead.

@@ -11,7 +11,7 @@ use crate::grid::{BitGrid, GridSpec, GridTriangles, MAX_CELLS};
 use crate::memory;
 use crate::model::{VoxelModel, VoxelStats};
 use crate::options::{FillMode, ShellMode, VoxelizeOptions};
-use crate::orient::analyse_parts_if_unbalanced;
+use crate::orient::analyse_parts_ahead;
 use crate::progress::{Progress, Stage};
 use crate::radix;
 use crate::shell::{Shell, shell};
@@ -73,9 +73,10 @@ fn voxelize_within_timed(
     let started = Instant::now();
     let bvh = OnceLock::new();
     // The winding fill's part analysis depends on the soup alone: when the soup's facing shows that the
-    // columns will not balance, it starts at once on the other thread, beside the grid's set-up and the shell,
-    // and the fill waits for it only if it gets there first. Otherwise the fill runs it if its columns show the
-    // need, beside the shell.
+    // columns will not balance (and the soup is not a sheet facing one way, which the fill's survey finds empty
+    // without it), it starts at once on the other thread, beside the grid's set-up and the shell, and the fill
+    // waits for it only if it gets there first. Otherwise the fill runs it if its columns show the need, beside
+    // the shell.
     // Set when the passes are done (or failed): an analysis not started by then is not needed (one thread,
     // where the join runs its halves one after the other, or a busy pool).
     let settled = AtomicBool::new(false);
@@ -100,7 +101,7 @@ fn voxelize_within_timed(
         },
         || {
             if options.fill == FillMode::Winding {
-                analyse_parts_if_unbalanced(soup, &settled);
+                analyse_parts_ahead(soup, &settled);
             }
         },
     );
