@@ -172,28 +172,25 @@ pub(crate) fn surface_colors(
                 while shell.cells.get(k).is_some_and(|&c| c < i) {
                     k += 1;
                 }
-                let own: &[u32] = if shell.cells.get(k) == Some(&i) { shell.triangles_at(k) } else { &[] };
                 let cell = coords.of(i);
                 let p = centre(cell);
-                let nearest = match *own {
-                    [] => {
-                        // The face neighbours' triangles, at most six lists.
-                        let (mut near, mut found) = ([0; 6], 0);
-                        for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
-                            let Some(neighbour) = spec.neighbour(cell, step) else { continue };
-                            match search_near(&shell.cells, *at, neighbour as u32) {
-                                Ok(k) => {
-                                    (*at, near[found]) = (k, k);
-                                    found += 1;
-                                }
-                                Err(insert) => *at = insert,
+                let nearest = if shell.cells.get(k) == Some(&i) {
+                    color_source(soup, tris, p, shell.triangles_at(k).map(|t| t as usize))
+                } else {
+                    // The face neighbours' triangles, at most six lists.
+                    let (mut near, mut found) = ([0; 6], 0);
+                    for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
+                        let Some(neighbour) = spec.neighbour(cell, step) else { continue };
+                        match search_near(&shell.cells, *at, neighbour as u32) {
+                            Ok(k) => {
+                                (*at, near[found]) = (k, k);
+                                found += 1;
                             }
+                            Err(insert) => *at = insert,
                         }
-                        let candidates =
-                            near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|&t| t as usize);
-                        color_source(soup, tris, p, candidates)
                     }
-                    _ => color_source(soup, tris, p, own.iter().map(|&t| t as usize)),
+                    let candidates = near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|t| t as usize);
+                    color_source(soup, tris, p, candidates)
                 };
                 *color = match nearest {
                     Some(Source::Nearest(t, w)) => color_at((t, w)),
@@ -255,7 +252,7 @@ fn nearest_far(spec: &GridSpec, tris: &GridTriangles, shell: &Shell, cells: &[u3
             let source = source?;
             let k = shell.cells.binary_search(&source).expect("the nearest shell cell is a shell cell");
             let p = centre(spec.coords(source as usize));
-            nearest_among(tris, p, shell.triangles_at(k).iter().map(|&t| t as usize))
+            nearest_among(tris, p, shell.triangles_at(k).map(|t| t as usize))
         })
         .collect()
 }
@@ -336,7 +333,7 @@ mod tests {
                 .min_by_key(|&k| (distance2(cell, spec.coords(shell.cells[k] as usize)), shell.cells[k]))
                 .unwrap();
             let p = centre(spec.coords(shell.cells[k] as usize));
-            let (t, w) = nearest_among(&tris, p, shell.triangles_at(k).iter().map(|&t| t as usize)).unwrap();
+            let (t, w) = nearest_among(&tris, p, shell.triangles_at(k).map(|t| t as usize)).unwrap();
             assert_eq!((v.color, v.part), (sample(&soup, t, w), part), "cell {cell:?}");
         }
         assert!(far > 100, "{far} far cells");
@@ -399,7 +396,7 @@ mod tests {
         let colors = surface_colors(&soup, &spec, &tris, &shell, &shell.cells, &Progress::new());
         let (mut flat, mut measured) = (0, 0);
         for (k, &(color, part)) in colors.iter().enumerate() {
-            let own = shell.triangles_at(k);
+            let own: Vec<u32> = shell.triangles_at(k).collect();
             let (t, w) =
                 nearest_among(&tris, centre(spec.coords(shell.cells[k] as usize)), own.iter().map(|&t| t as usize))
                     .unwrap();

@@ -16,9 +16,9 @@ use crate::geom::GridTriangle;
 use crate::grid::{GridSpec, GridTriangles};
 use crate::options::FillMode;
 
-/// Bytes per overlap of a triangle and a cell: the shell's packed pair (8) and its sorted cell and triangle
-/// (8), the fill's crossings, the visible cells with their colour and part (12 each, fewer than the
-/// overlaps). Measured peaks (docs/benchmarks.md) are about half the estimate.
+/// Bytes per overlap of a triangle and a cell: the shell's packed run (8; a run holds one overlap or more) and
+/// its sorted cell and run (12), the fill's crossings, the visible cells with their colour and part (12 each,
+/// fewer than the overlaps). Measured peaks (docs/benchmarks.md) are about half the estimate.
 const BYTES_PER_OVERLAP: f64 = 32.0;
 
 /// Bits per cell at the peak: the solid grid and one more while it is built (a flood fill adds its shell

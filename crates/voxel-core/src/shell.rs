@@ -17,20 +17,23 @@ pub(crate) mod distance;
 pub(crate) mod octree;
 use cells::CellTester;
 
-/// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows).
+/// Shell cells, ascending by linear index, with the triangles overlapping each (compressed rows of runs of
+/// consecutive triangles: a fine mesh's neighbouring triangles mostly share their cells, and a cell crossed by
+/// a sheet of tiny ones lists a few runs rather than dozens of triangles).
 #[derive(Debug, Default)]
 pub(crate) struct Shell {
     /// Linear indices of the cells any triangle overlaps.
     pub cells: Vec<u32>,
-    /// `tris[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
+    /// `runs[offsets[k]..offsets[k + 1]]` overlap cell `cells[k]`, ascending.
     offsets: Vec<u32>,
-    tris: Vec<u32>,
+    /// Runs of triangles: the first, and how many follow it.
+    runs: Vec<[u32; 2]>,
 }
 
 impl Shell {
-    /// The triangles overlapping the `k`-th shell cell, `cells[k]`.
-    pub fn triangles_at(&self, k: usize) -> &[u32] {
-        &self.tris[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+    /// The triangles overlapping the `k`-th shell cell, `cells[k]`, ascending.
+    pub fn triangles_at(&self, k: usize) -> Triangles<'_> {
+        Triangles { runs: self.runs[self.offsets[k] as usize..self.offsets[k + 1] as usize].iter(), next: 0, end: 0 }
     }
 
     /// The shell cells that a thin piece of surface passes through, ascending: cells the solid `fill`
@@ -55,7 +58,7 @@ impl Shell {
             // Neighbouring triangles mostly step alike (a cell crossed by a sheet of tiny triangles lists dozens):
             // a step just found not thin is not looked up again.
             let mut last = None;
-            self.triangles_at(k).iter().any(|&tri| {
+            self.triangles_at(k).any(|tri| {
                 let t = &tris.get(tri as usize);
                 let step = normal_step((t[1] - t[0]).cross(t[2] - t[0]));
                 if last.replace(step) == Some(step) {
@@ -73,6 +76,29 @@ impl Shell {
     }
 }
 
+/// The triangles of runs of consecutive triangles, in order ([`Shell::triangles_at`]).
+#[derive(Clone, Debug)]
+pub(crate) struct Triangles<'a> {
+    runs: std::slice::Iter<'a, [u32; 2]>,
+    /// The rest of the run being walked.
+    next: u32,
+    end: u32,
+}
+
+impl Iterator for Triangles<'_> {
+    type Item = u32;
+
+    #[inline]
+    fn next(&mut self) -> Option<u32> {
+        if self.next == self.end {
+            let &[first, count] = self.runs.next()?;
+            (self.next, self.end) = (first, first + count);
+        }
+        self.next += 1;
+        Some(self.next - 1)
+    }
+}
+
 /// The most top bits of a cell's index that pick its slab in [`shell`] (the slabs sort side by side; a small grid
 /// has fewer: [`SLAB_CELL_BITS`]).
 const SLAB_BITS: u32 = 6;
@@ -81,8 +107,12 @@ const SLAB_BITS: u32 = 6;
 /// tasks starts fewer lists (a list's first segment is 512 bytes: at R=128 a model's 24 tasks started 1,536).
 const SLAB_CELL_BITS: u32 = 16;
 
-/// The overlaps below which consecutive slabs of [`shell`] sort together.
-const OVERLAPS_PER_SORT: usize = 1 << 16;
+/// Tasks per thread of [`shell`]'s pass over the triangles (a few, so that a thread that finishes early takes
+/// another's).
+const TASKS_PER_THREAD: usize = 8;
+
+/// The runs below which consecutive slabs of [`shell`] sort together.
+const RUNS_PER_SORT: usize = 1 << 16;
 
 /// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
 const THIN_CHUNK: usize = 4096;
@@ -106,9 +136,138 @@ fn dominant_axis(n: DVec3) -> usize {
     }
 }
 
-/// One (cell, triangle) overlap packed for sorting: cell, then triangle.
-fn pack(cell: usize, tri: usize) -> u64 {
-    (cell as u64) << 32 | tri as u64
+/// The slots of [`TaskRuns`] for open runs besides the current one: a triangle crossing cell boundaries adds to a
+/// few cells, and the next triangle mostly to the same ones.
+const OPEN_RUNS: usize = 16;
+
+/// A free slot of [`TaskRuns`]: no cell has this index (cells are numbered below
+/// [`MAX_CELLS`](crate::grid::MAX_CELLS)).
+const FREE: [u32; 3] = [u32::MAX, 0, 0];
+
+/// One task's overlaps of [`shell`] as runs `[cell, first triangle, count]` of consecutive triangles overlapping
+/// one cell, in lists by the top bits of their cell (a slab of the grid each). Open are the current run (the
+/// last overlap's) and, in a slot picked by a hash of its cell, each of up to [`OPEN_RUNS`] others. A run leaves
+/// for its slab's list when the triangle after its last skips its cell or another run takes its slot, so a
+/// cell's runs reach its list in the order of their triangles, as the sort by cell must find them.
+struct TaskRuns {
+    slabs: Vec<Segments<u64>>,
+    shift: u32,
+    code: RunCode,
+    /// The current run: its cell ([`FREE`]'s: none), first triangle and count. (Fields of their own, which the
+    /// compiler keeps in registers across a task's loop: most overlaps of a fine mesh only add one to `count`.)
+    cell: u32,
+    first: u32,
+    count: u32,
+    /// The other open runs ([`FREE`]: a free slot).
+    open: [[u32; 3]; OPEN_RUNS],
+}
+
+impl TaskRuns {
+    /// No runs, for slabs of 2^`shift` cells, `slab_count` of them, packed by `code`.
+    fn new(slab_count: usize, shift: u32, code: RunCode) -> Self {
+        let slabs = (0..slab_count).map(|_| Segments::default()).collect();
+        Self { slabs, shift, code, cell: FREE[0], first: 0, count: 0, open: [FREE; OPEN_RUNS] }
+    }
+
+    /// Adds the overlap of cell `cell` and triangle `tri` (each pair once, triangles ascending).
+    #[inline]
+    fn push(&mut self, cell: u32, tri: u32) {
+        if cell != self.cell || self.first + self.count != tri || self.count == self.code.longest {
+            self.switch(cell, tri);
+        }
+        self.count += 1;
+    }
+
+    /// Makes the run of `cell` that `tri` extends the current one (an empty run when none does).
+    #[inline]
+    fn switch(&mut self, cell: u32, tri: u32) {
+        let current = [self.cell, self.first, self.count];
+        if cell == self.cell {
+            // The triangle after the run's last skips this cell, or the run is as long as a run can be: it is done.
+            self.close(current);
+        } else {
+            // The current run steps aside into its slot; this cell's run, if open, steps out of its own.
+            let parked = std::mem::replace(&mut self.open[slot(current[0])], current);
+            self.close(parked);
+            let run = &mut self.open[slot(cell)];
+            if run[0] == cell {
+                let run = std::mem::replace(run, FREE);
+                if run[1] + run[2] == tri && run[2] < self.code.longest {
+                    [self.cell, self.first, self.count] = run;
+                    return;
+                }
+                self.close(run);
+            }
+        }
+        [self.cell, self.first, self.count] = [cell, tri, 0];
+    }
+
+    /// Puts `run` (unless it is [`FREE`]) in its slab's list.
+    #[inline]
+    fn close(&mut self, run: [u32; 3]) {
+        if run[0] != FREE[0] {
+            self.slabs[(run[0] >> self.shift) as usize].push(self.code.pack(run));
+        }
+    }
+
+    /// The lists, with every open run closed.
+    fn finish(mut self) -> Vec<Segments<u64>> {
+        self.close([self.cell, self.first, self.count]);
+        for run in self.open {
+            self.close(run);
+        }
+        self.slabs
+    }
+}
+
+/// How a run `[cell, first triangle, count]` is packed in a `u64` for the sort by cell: the cell in the top
+/// bits, then the count less one, then the first triangle, each in as many bits as the grid's cells and the
+/// triangles need. The count has the bits left over (none when the cells and the triangles need all 64: then
+/// every run is one triangle long).
+#[derive(Clone, Copy, Debug)]
+struct RunCode {
+    /// Where the cell starts, the bits of the first triangle, and the longest run.
+    cell_shift: u32,
+    triangle_bits: u32,
+    longest: u32,
+}
+
+impl RunCode {
+    /// The code for grids of `cells` cells and `triangles` triangles.
+    fn new(cells: usize, triangles: usize) -> Self {
+        let (cell_bits, triangle_bits) = (radix::bits_for(cells).max(1), radix::bits_for(triangles).max(1));
+        let count_bits = (u64::BITS - cell_bits - triangle_bits).min(RUN_BITS);
+        Self { cell_shift: u64::BITS - cell_bits, triangle_bits, longest: 1 << count_bits }
+    }
+
+    #[inline]
+    fn pack(&self, [cell, first, count]: [u32; 3]) -> u64 {
+        u64::from(cell) << self.cell_shift | u64::from(count - 1) << self.triangle_bits | u64::from(first)
+    }
+
+    /// The cell of a packed run.
+    #[inline]
+    fn cell(&self, run: u64) -> u32 {
+        (run >> self.cell_shift) as u32
+    }
+
+    /// The first triangle and the count of a packed run.
+    #[inline]
+    fn triangles(&self, run: u64) -> [u32; 2] {
+        let first = run & ((1 << self.triangle_bits) - 1);
+        let count = (run >> self.triangle_bits) & u64::from(self.longest - 1);
+        [first as u32, count as u32 + 1]
+    }
+}
+
+/// The most bits of a run's count less one (runs of up to 2¹⁶ triangles).
+const RUN_BITS: u32 = 16;
+
+/// The slot of [`TaskRuns`] of an open run of cell `cell` (a multiplicative hash: neighbouring cells, whose
+/// indices differ by a row's or a layer's cells, take different slots).
+#[inline]
+fn slot(cell: u32) -> usize {
+    (cell.wrapping_mul(0x9E37_79B1) >> (u32::BITS - OPEN_RUNS.trailing_zeros())) as usize
 }
 
 /// How much of the triangle–box test a candidate cell needs.
@@ -183,12 +342,12 @@ fn last_cell_of(from: f64, to: f64, cells: u32) -> u32 {
 /// Up to this many candidate columns, a triangle's footprints are not placed against its projection.
 const FEW_COLUMNS: u32 = 9;
 
-/// Appends the packed overlaps of triangle `tri` (cells half-open along every axis, so a triangle on a
+/// Hands each cell that triangle `tri` overlaps to `out` (cells half-open along every axis, so a triangle on a
 /// cell boundary lands in one cell, not two; a triangle whose extent along an axis ends exactly on a cell
 /// boundary does not reach the next cell, which it would only touch along an edge or at a point, so a face
 /// lying on cell boundaries gets the same cells however its coordinates were rounded before the grid snapped
 /// them).
-fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl FnMut(u64)) {
+fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl FnMut(u32)) {
     let t = tris.get(tri);
     let n = (t[1] - t[0]).cross(t[2] - t[0]);
     if n.length_squared() <= 0.0 || n.is_nan() {
@@ -200,7 +359,7 @@ fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &mut impl Fn
     let first = [cell_of(lo.x, nx), cell_of(lo.y, ny), cell_of(lo.z, nz)];
     let last = [last_cell_of(lo.x, hi.x, nx), last_cell_of(lo.y, hi.y, ny), last_cell_of(lo.z, hi.z, nz)];
     let crossed = (last[0] - first[0]) + (last[1] - first[1]) + (last[2] - first[2]);
-    let mut push = |c: [u32; 3]| out(pack(spec.index(c[0], c[1], c[2]), tri));
+    let mut push = |c: [u32; 3]| out(spec.index(c[0], c[1], c[2]) as u32);
     if crossed == 0 {
         // The whole triangle sits in one cell: it overlaps that cell and no other.
         push(first);
@@ -334,32 +493,38 @@ fn overlaps_across(
 // `valgrind --tool=callgrind --dump-before=voxel_core::shell::shell --dump-after=voxel_core::shell::shell`.
 #[inline(never)]
 pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) -> Shell {
-    // Each task's overlaps go to lists by the top bits of their cell (a slab of the grid each), so that the
-    // slabs sort side by side, each into its own stretch of the output.
+    // Each task's runs go to lists by the top bits of their cell (a slab of the grid each), so that the slabs
+    // sort side by side, each into its own stretch of the output.
     let bits = radix::bits_for(spec.cell_count());
     let shift = bits.saturating_sub(SLAB_BITS).max(SLAB_CELL_BITS).min(bits);
     let slab_count = 1 << (bits - shift);
-    let mut lists: Vec<Vec<Segments<u64>>> = (0..tris.len())
+    // Each task runs its own loop over its triangles rather than rayon's `fold`, whose accumulator passes through
+    // memory at every triangle: the current run's fields then stay in registers (the height field's 2 M triangles
+    // at R=128: 26 ms against 43 on a 2-core VM).
+    let per_task = tris.len().div_ceil(rayon::current_num_threads() * TASKS_PER_THREAD).max(1);
+    let code = RunCode::new(spec.cell_count(), tris.len());
+    let mut lists: Vec<Vec<Segments<u64>>> = (0..tris.len().div_ceil(per_task))
         .into_par_iter()
-        .fold(
-            || (0..slab_count).map(|_| Segments::default()).collect::<Vec<_>>(),
-            |mut slabs, tri| {
-                if !progress.is_cancelled() {
-                    overlaps(spec, tris, tri, &mut |p| slabs[(p >> 32 >> shift) as usize].push(p));
+        .map(|task| {
+            let mut runs = TaskRuns::new(slab_count, shift, code);
+            for tri in task * per_task..((task + 1) * per_task).min(tris.len()) {
+                if progress.is_cancelled() {
+                    break;
                 }
-                slabs
-            },
-        )
+                overlaps(spec, tris, tri, &mut |cell| runs.push(cell, tri as u32));
+            }
+            runs.finish()
+        })
         .collect();
-    // Per slab, the tasks' lists in the tasks' order: they keep the triangles' order, so sorting by cell alone
-    // orders by (cell, triangle), and the sorted triangles are the compressed rows' already.
+    // Per slab, the tasks' lists in the tasks' order: a cell's runs keep the triangles' order, so sorting by cell
+    // alone orders them by (cell, triangle), and the sorted runs are the compressed rows' already.
     let slabs: Vec<Vec<Vec<u64>>> = (0..slab_count)
         .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
         .collect();
-    let (mut cells, tris) = sorted_by_cell(slabs, shift);
+    let (mut cells, runs) = sorted_by_cell(slabs, shift, code);
     let len = cells.len();
-    // Compressed rows: each run of equal cells becomes one cell, in place. (Room for the most offsets there can be:
-    // only the pages written are touched, where a growing list would copy itself into new ones.)
+    // Compressed rows: each group of equal cells becomes one cell, in place. (Room for the most offsets there can
+    // be: only the pages written are touched, where a growing list would copy itself into new ones.)
     let mut offsets = Vec::with_capacity(len + 1);
     let mut count = 0;
     for k in 0..len {
@@ -371,24 +536,23 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
     }
     offsets.push(len as u32);
     cells.truncate(count);
-    Shell { cells, offsets, tris }
+    Shell { cells, offsets, runs }
 }
 
-/// The overlaps of `slabs` (slab `k` holding the cells whose index shifted right by `shift` is `k`, each in
-/// order of triangles), sorted by cell, split into their cells and their triangles. Consecutive slabs sort
-/// together until they hold enough overlaps to pay for a sort of their own, each sort on its own thread into its
-/// own stretch of the lists (its first slab's first cell as key 0); its last pass writes each overlap's fields
-/// to its position.
-fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>) {
+/// The runs of `slabs` (slab `k` holding the runs whose cell shifted right by `shift` is `k`, each cell's in order
+/// of triangles; packed by `code`), sorted by cell, split into their cells and their runs. Consecutive slabs sort together
+/// until they hold enough runs to pay for a sort of their own, each sort on its own thread into its own stretch of
+/// the lists (its first slab's first cell as key 0); its last pass writes each run's fields to its position.
+fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32, code: RunCode) -> (Vec<u32>, Vec<[u32; 2]>) {
     let len = slabs.iter().flatten().map(Vec::len).sum();
-    let (mut cells, mut tris) = (vec![0u32; len], vec![0u32; len]);
-    let (mut cells_left, mut tris_left) = (cells.as_mut_slice(), tris.as_mut_slice());
+    let (mut cells, mut runs) = (vec![0u32; len], vec![[0u32; 2]; len]);
+    let (mut cells_left, mut runs_left) = (cells.as_mut_slice(), runs.as_mut_slice());
     let mut sorts = Vec::new();
     let mut slabs = slabs.into_iter().enumerate();
     while let Some((first, parts)) = slabs.next() {
         let mut group = parts;
         let mut end = first + 1;
-        while group.iter().map(Vec::len).sum::<usize>() < OVERLAPS_PER_SORT {
+        while group.iter().map(Vec::len).sum::<usize>() < RUNS_PER_SORT {
             let Some((_, parts)) = slabs.next() else { break };
             group.extend(parts);
             end += 1;
@@ -396,20 +560,20 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>)
         let n = group.iter().map(Vec::len).sum();
         let (group_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
         cells_left = rest;
-        let (group_tris, rest) = std::mem::take(&mut tris_left).split_at_mut(n);
-        tris_left = rest;
+        let (group_runs, rest) = std::mem::take(&mut runs_left).split_at_mut(n);
+        runs_left = rest;
         let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
-        sorts.push((group, base, span, group_cells, group_tris));
+        sorts.push((group, base, span, group_cells, group_runs));
     }
-    sorts.into_par_iter().for_each(|(parts, base, span, cells, tris)| {
+    sorts.into_par_iter().for_each(|(parts, base, span, cells, runs)| {
         radix::sort_parts_into(
             parts,
             radix::bits_for(span as usize),
-            |p| ((p >> 32) - base) as u32,
-            |at, p| (cells[at], tris[at]) = ((p >> 32) as u32, p as u32),
+            |&run| (u64::from(code.cell(run)) - base) as u32,
+            |at, run| (cells[at], runs[at]) = (code.cell(run), code.triangles(run)),
         );
     });
-    (cells, tris)
+    (cells, runs)
 }
 
 #[cfg(test)]
@@ -417,7 +581,7 @@ mod tests {
     use super::*;
     use crate::geom::BoxTester;
     use crate::grid::GridSize;
-    use crate::shapes::torus;
+    use crate::shapes::{torus, uv_sphere};
     use crate::soup::TriangleSoup;
 
     #[test]
@@ -469,7 +633,7 @@ mod tests {
                 std::array::from_fn(|_| DVec3::from(base.map(|b| b + next(reach) as f64 / 8.0)).min(DVec3::splat(8.0)));
             let tris = GridTriangles::from_triangles(&[t]);
             let mut fast = Vec::new();
-            overlaps(&spec, &tris, 0, &mut |p| fast.push(p));
+            overlaps(&spec, &tris, 0, &mut |cell| fast.push(cell));
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             if n.length_squared() == 0.0 {
                 assert!(fast.is_empty());
@@ -490,7 +654,7 @@ mod tests {
             }
             let mut whole = Vec::new();
             overlaps_across(&spec, &t, n, [lo, hi], [first, last], &mut |c| {
-                whole.push(pack(spec.index(c[0], c[1], c[2]), 0))
+                whole.push(spec.index(c[0], c[1], c[2]) as u32)
             });
             whole.sort_unstable();
             fast.sort_unstable();
@@ -520,6 +684,88 @@ mod tests {
         }
     }
 
+    /// Each shell cell's triangles as the overlaps of every triangle give them: cells ascending, each cell's
+    /// triangles ascending.
+    fn listed_by_cell(spec: &GridSpec, tris: &GridTriangles) -> Vec<(u32, Vec<u32>)> {
+        let mut pairs = Vec::new();
+        for tri in 0..tris.len() {
+            overlaps(spec, tris, tri, &mut |cell| pairs.push((cell, tri as u32)));
+        }
+        pairs.sort_unstable();
+        let mut listed: Vec<(u32, Vec<u32>)> = Vec::new();
+        for (cell, tri) in pairs {
+            match listed.last_mut() {
+                Some((last, tris)) if *last == cell => tris.push(tri),
+                _ => listed.push((cell, vec![tri])),
+            }
+        }
+        listed
+    }
+
+    #[test]
+    fn runs_list_every_cells_triangles_in_order() {
+        // A fine sphere (many triangles a cell: long runs), a coarse torus (a few cells a triangle: runs broken
+        // and resumed as triangles step between neighbouring cells) and a box of a few big triangles, together.
+        let mut soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 160), [1.0; 4]);
+        soup.add_mesh(&torus(1.6, 0.4, 24), [1.0; 4], "torus");
+        soup.add_mesh(&crate::shapes::cuboid([-2.2; 3], [-1.2; 3]), [1.0; 4], "box");
+        for resolution in [12, 40] {
+            let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(resolution), 1.0, 1 << 26).unwrap();
+            let tris = spec.grid_triangles(&soup);
+            let shell = shell(&spec, &tris, &Progress::new());
+            let got: Vec<(u32, Vec<u32>)> =
+                (0..shell.cells.len()).map(|k| (shell.cells[k], shell.triangles_at(k).collect())).collect();
+            let expected = listed_by_cell(&spec, &tris);
+            let overlaps: usize = expected.iter().map(|(_, tris)| tris.len()).sum();
+            assert_eq!(got, expected, "R={resolution}");
+            assert!(
+                shell.runs.len() * 3 < overlaps,
+                "R={resolution}: {} runs of {overlaps} overlaps",
+                shell.runs.len()
+            );
+        }
+    }
+
+    #[test]
+    fn a_run_as_long_as_its_code_allows_is_closed_and_a_new_one_begins() {
+        // A code with one bit for the count (runs of at most two triangles), and one with none (runs of one).
+        let codes =
+            [RunCode { cell_shift: 64 - 10, triangle_bits: 53, longest: 2 }, RunCode::new(1 << 32, u32::MAX as usize)];
+        assert_eq!(codes[1].longest, 1);
+        for code in codes {
+            let mut runs = TaskRuns::new(4, 8, code);
+            // Cell 5 for triangles 0..7 but 4; cell 300 (another slab) for 2..5; cell 6 for 3 and 6.
+            let mut pairs = Vec::new();
+            for tri in 0..7 {
+                for cell in [5, 300, 6] {
+                    let overlaps = match cell {
+                        5 => tri != 4,
+                        300 => (2..5).contains(&tri),
+                        _ => tri == 3 || tri == 6,
+                    };
+                    if overlaps {
+                        runs.push(cell, tri);
+                        pairs.push((cell, tri));
+                    }
+                }
+            }
+            let slabs = runs.finish();
+            let mut listed: Vec<(u32, u32)> = Vec::new();
+            for run in slabs.into_iter().flat_map(|slab| Segments::concat(vec![slab])).flatten() {
+                let [first, count] = code.triangles(run);
+                assert!(count <= code.longest, "{count}");
+                listed.extend((first..first + count).map(|tri| (code.cell(run), tri)));
+            }
+            // Stable by cell: each cell's triangles stay ascending.
+            listed.sort_by_key(|&(cell, _)| cell);
+            pairs.sort_unstable();
+            assert_eq!(listed, pairs);
+        }
+        let code = RunCode::new(1000, 70_000);
+        let run = [999, 69_999, 1 << RUN_BITS];
+        assert_eq!((code.cell(code.pack(run)), code.triangles(code.pack(run))), (999, [69_999, 1 << RUN_BITS]));
+    }
+
     #[test]
     fn thin_cells_are_the_empty_cells_with_a_triangle_whose_normal_neighbours_are_empty() {
         let soup = TriangleSoup::from_mesh(&torus(2.0, 0.7, 20), [1.0; 4]);
@@ -538,7 +784,7 @@ mod tests {
                     let step = normal_step((t(tri)[1] - t(tri)[0]).cross(t(tri)[2] - t(tri)[0]));
                     [step, step.map(|s| -s)].map(|s| spec.offset(index, s))
                 };
-                !fill.get(index) && shell.triangles_at(k).iter().any(|&tri| sides(tri).into_iter().all(empty))
+                !fill.get(index) && shell.triangles_at(k).any(|tri| sides(tri).into_iter().all(empty))
             })
             .map(|k| shell.cells[k])
             .collect();
