@@ -177,10 +177,21 @@ fn distinct(values: impl Iterator<Item = u32>) -> usize {
             runs.push(v);
         }
     }
-    let mut values = radix::sort_by_key(runs, u32::BITS, |&v| v);
-    values.dedup();
-    values.len()
+    // Most models show a few colours (their materials, a palette of vertex colours): a small set counts them
+    // without sorting; past `SMALL_SET` of them, the runs are sorted.
+    let mut seen = rustc_hash::FxHashSet::default();
+    for &v in &runs {
+        if seen.insert(v) && seen.len() > SMALL_SET {
+            let mut values = radix::sort_by_key(runs, u32::BITS, |&v| v);
+            values.dedup();
+            return values.len();
+        }
+    }
+    seen.len()
 }
+
+/// The most distinct values [`distinct`] counts in a set.
+const SMALL_SET: usize = 1 << 10;
 
 /// The solid cells from the fill and the shell of `tris`, per the modes.
 fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &GridTriangles) -> BitGrid {
@@ -251,5 +262,18 @@ mod tests {
         let (coloured, left) = (colors(&going), colors(&cancelled));
         assert!(coloured.iter().all(|&(c, _)| c == [124, 203, 243, 255]), "{:?}", coloured[0]);
         assert!(left.iter().all(|&(c, _)| c == [255; 4]), "the cells are left uncoloured");
+    }
+
+    #[test]
+    fn distinct_values_are_counted_whether_few_or_many() {
+        // Runs of repeats and values seen again far apart, below and above the small set's size.
+        for kinds in [1, 7, SMALL_SET, SMALL_SET + 1, 50_000] {
+            let values: Vec<u32> =
+                (0..200_000u32).map(|k| (k / 3).wrapping_mul(2_654_435_761) % kinds as u32).collect();
+            let expected = values.iter().collect::<std::collections::HashSet<_>>().len();
+            assert_eq!(expected > SMALL_SET, kinds > SMALL_SET, "{expected} of {kinds} kinds");
+            assert_eq!(distinct(values.into_iter()), expected, "{kinds} kinds");
+        }
+        assert_eq!(distinct(std::iter::empty()), 0);
     }
 }
