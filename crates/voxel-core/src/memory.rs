@@ -17,7 +17,7 @@ use crate::grid::{GridSpec, GridTriangles};
 use crate::options::FillMode;
 
 /// Bytes per overlap of a triangle and a cell: the shell's packed run (8; a run holds one overlap or more) and
-/// its sorted cell and run (12), the fill's crossings, the visible cells with their colour and part (12 each,
+/// its sorted cell and run (8), the fill's crossings, the visible cells with their colour and part (12 each,
 /// fewer than the overlaps). Measured peaks (docs/benchmarks.md) are about half the estimate.
 const BYTES_PER_OVERLAP: f64 = 32.0;
 
