@@ -18,7 +18,8 @@ use crate::options::FillMode;
 
 /// Bytes per overlap of a triangle and a cell: the shell's packed run (8; a run holds one overlap or more) and
 /// its sorted cell and run (8), the fill's crossings, the visible cells with their colour and part (12 each,
-/// fewer than the overlaps). Measured peaks (docs/benchmarks.md) are about half the estimate.
+/// fewer than the overlaps). Measured peaks (docs/benchmarks.md: the FlightHelmet at R=512–2048) are 70–85 % of
+/// the estimate.
 const BYTES_PER_OVERLAP: f64 = 32.0;
 
 /// Bits per cell at the peak: the solid grid and one more while it is built (a flood fill adds its shell
