@@ -138,6 +138,7 @@ fn dominant_axis(n: DVec3) -> usize {
 /// The slots of [`TaskRuns`] for open runs besides the current one: a triangle crossing cell boundaries adds to a
 /// few cells, and the next triangle mostly to the same ones.
 const OPEN_RUNS: usize = 16;
+const _: () = assert!(OPEN_RUNS.is_power_of_two(), "`slot` takes the top bits of a hash");
 
 /// A free slot of [`TaskRuns`]: no cell has this index (cells are numbered below
 /// [`MAX_CELLS`](crate::grid::MAX_CELLS)).
