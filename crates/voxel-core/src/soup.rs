@@ -390,15 +390,27 @@ impl TriangleSoup {
         // Each part's material and every vertex checked once, then each triangle's part: the triangles are
         // searched for the first unusable one only when something is wrong.
         let part_usable: Vec<bool> = self.parts.iter().map(|p| p.material < self.materials.len()).collect();
-        let all_finite = self.positions.par_iter().with_min_len(1 << 14).all(|p| p.iter().all(|c| c.is_finite()));
+        // Whole chunks at a time, without stopping at the first bad value: the loops vectorize (the soup is
+        // searched for the first bad triangle below only when there is one).
+        let finite = |p: &[f32; 3]| p[0].is_finite() & p[1].is_finite() & p[2].is_finite();
+        let all_finite =
+            self.positions.par_chunks(CHECKED_PER_TASK).all(|chunk| chunk.iter().fold(true, |ok, p| ok & finite(p)));
         let part_ok = |part: u32| part_usable.get(part as usize) == Some(&true);
-        if all_finite && self.triangle_parts.par_iter().with_min_len(1 << 14).all(|&part| part_ok(part)) {
+        // With every part usable, a triangle's part is usable when it is below the count: one maximum.
+        let parts_ok = if part_usable.iter().all(|&usable| usable) {
+            let most = self.triangle_parts.par_chunks(CHECKED_PER_TASK).map(|chunk| chunk.iter().copied().max()).max();
+            most.flatten().is_none_or(|most| (most as usize) < self.parts.len())
+        } else {
+            self.triangle_parts.par_iter().with_min_len(CHECKED_PER_TASK).all(|&part| part_ok(part))
+        };
+        if all_finite && parts_ok {
             return Ok(());
         }
         let usable = |t: usize| {
             part_ok(self.triangle_parts[t]) && self.triangle_positions(t).as_flattened().iter().all(|c| c.is_finite())
         };
-        let Some(t) = (0..self.triangle_count()).into_par_iter().with_min_len(1 << 14).find_first(|&t| !usable(t))
+        let Some(t) =
+            (0..self.triangle_count()).into_par_iter().with_min_len(CHECKED_PER_TASK).find_first(|&t| !usable(t))
         else {
             return Ok(());
         };
@@ -428,6 +440,9 @@ impl TriangleSoup {
         Some(chunks.reduce(|| (first, first), |a, b| grow(grow(a, b.0), b.1)))
     }
 }
+
+/// Vertices or triangles per task of [`TriangleSoup::validate`]'s checks.
+const CHECKED_PER_TASK: usize = 1 << 14;
 
 /// The vertices of `count` that `corners` (indices below `count`) use, ascending, and the corners re-indexed
 /// to that list; `None` when they use every vertex.
@@ -502,5 +517,30 @@ mod tests {
         soup.push_triangle(p, [Vertex::at([0.0; 3]), Vertex::at([1.0, 0.0, f32::NAN]), Vertex::at([0.0, 1.0, 0.0])]);
         let err = soup.validate().unwrap_err();
         assert!(err.to_string().contains("NaN"), "{err}");
+    }
+
+    #[test]
+    fn validate_names_a_missing_part_or_material_and_a_corner_that_is_not_finite_in_any_chunk() {
+        // More triangles than a task checks, the bad one in a later task.
+        let mut soup = TriangleSoup::default();
+        let material = soup.add_material(Material::default());
+        let part = soup.add_part(material, "strip");
+        for k in 0..3 * CHECKED_PER_TASK {
+            let x = k as f32;
+            soup.push_triangle(part, [[x, 0.0, 0.0], [x + 1.0, 0.0, 0.0], [x, 1.0, 0.0]].map(Vertex::at));
+        }
+        assert!(soup.validate().is_ok());
+        let bad = 2 * CHECKED_PER_TASK + 17;
+        soup.triangle_parts[bad] = 1;
+        let err = soup.validate().unwrap_err().to_string();
+        assert!(err.contains(&format!("triangle {bad} refers to missing part 1")), "{err}");
+        // A second part whose material is missing: its triangles are named by the part.
+        soup.parts.push(Part { material: 7, name: "lost".into() });
+        let err = soup.validate().unwrap_err().to_string();
+        assert!(err.contains("part lost refers to a missing material"), "{err}");
+        soup.triangle_parts[bad] = 0;
+        assert!(soup.validate().is_ok(), "the part without a material is used by no triangle");
+        soup.positions[3 * bad + 1][2] = f32::INFINITY;
+        assert!(matches!(soup.validate(), Err(VoxelError::NonFinite(name)) if name == "strip"));
     }
 }
