@@ -136,17 +136,18 @@ pub(crate) fn analyse_parts_ahead(soup: &TriangleSoup, settled: &AtomicBool) {
 /// ([`winding_roles`]).
 fn parts_likely_needed(soup: &TriangleSoup) -> bool {
     // Differences of nearby f32 coordinates are exact; their products are exact in f64.
-    let twice_areas = |t: usize| {
+    let sides = |t: usize| {
         let [a, b, c] = soup.triangle_positions(t);
         let d = |p: [f32; 3]| DVec3::from(std::array::from_fn::<f64, 3, _>(|k| f64::from(p[k] - a[k])));
-        d(b).cross(d(c))
+        (d(b), d(c))
     };
     // Facing one way: from a sample of about 2¹⁶, evenly spread (a sheet facing one way does so in any sample; a
     // closed surface does not), first, as it settles a terrain at once.
     let every = soup.triangle_count().div_ceil(1 << 16).max(1);
     let (mut net, mut total) = (DVec3::ZERO, DVec3::ZERO);
     for t in (0..soup.triangle_count()).step_by(every) {
-        let twice = twice_areas(t);
+        let (b, c) = sides(t);
+        let twice = b.cross(c);
         net += twice;
         total += twice.abs();
     }
@@ -156,7 +157,8 @@ fn parts_likely_needed(soup: &TriangleSoup) -> bool {
     // Along Z from every triangle: a closed surface's cancel only in the sum of all.
     let (mut net_z, mut total_z) = (0.0f64, 0.0f64);
     for t in 0..soup.triangle_count() {
-        let twice_area = twice_areas(t).z;
+        let (b, c) = sides(t);
+        let twice_area = b.x * c.y - b.y * c.x;
         net_z += twice_area;
         total_z += twice_area.abs();
     }

@@ -94,7 +94,7 @@ impl Iterator for Triangles<'_> {
     #[inline]
     fn next(&mut self) -> Option<u32> {
         if self.next == self.end {
-            let [first, count] = self.code.triangles(u64::from(*self.runs.next()?));
+            let [first, count] = self.code.triangles(*self.runs.next()?);
             (self.next, self.end) = (first, first + count);
         }
         self.next += 1;
@@ -140,9 +140,11 @@ fn dominant_axis(n: DVec3) -> usize {
 const OPEN_RUNS: usize = 16;
 const _: () = assert!(OPEN_RUNS.is_power_of_two(), "`slot` takes the top bits of a hash");
 
-/// A free slot of [`TaskRuns`]: no cell has this index (cells are numbered below
-/// [`MAX_CELLS`](crate::grid::MAX_CELLS)).
-const FREE: [u32; 3] = [u32::MAX, 0, 0];
+/// No cell has this index (cells are numbered below [`MAX_CELLS`](crate::grid::MAX_CELLS)): the cell of no run.
+const NO_CELL: u32 = u32::MAX;
+
+/// A free slot of [`TaskRuns`].
+const FREE: [u32; 3] = [NO_CELL, 0, 0];
 
 /// One task's overlaps of [`shell`] as runs `[cell, first triangle, count]` of consecutive triangles overlapping
 /// one cell, in lists by the top bits of their cell (a slab of the grid each). Open are the current run (the
@@ -153,7 +155,7 @@ struct TaskRuns {
     slabs: Vec<Segments<u64>>,
     shift: u32,
     code: RunCode,
-    /// The current run: its cell ([`FREE`]'s: none), first triangle and count. (Fields of their own, which the
+    /// The current run: its cell ([`NO_CELL`]: none), first triangle and count. (Fields of their own, which the
     /// compiler keeps in registers across a task's loop: most overlaps of a fine mesh only add one to `count`.)
     cell: u32,
     first: u32,
@@ -166,7 +168,7 @@ impl TaskRuns {
     /// No runs, for slabs of 2^`shift` cells, `slab_count` of them, packed by `code`.
     fn new(slab_count: usize, shift: u32, code: RunCode) -> Self {
         let slabs = (0..slab_count).map(|_| Segments::default()).collect();
-        Self { slabs, shift, code, cell: FREE[0], first: 0, count: 0, open: [FREE; OPEN_RUNS] }
+        Self { slabs, shift, code, cell: NO_CELL, first: 0, count: 0, open: [FREE; OPEN_RUNS] }
     }
 
     /// Adds the overlap of cell `cell` and triangle `tri` (each pair once, triangles ascending).
@@ -187,7 +189,7 @@ impl TaskRuns {
             self.close(current);
         } else {
             // The current run steps aside into its slot; this cell's run, if open, steps out of its own.
-            if current[0] != FREE[0] {
+            if current[0] != NO_CELL {
                 let parked = std::mem::replace(&mut self.open[slot(current[0])], current);
                 self.close(parked);
             }
@@ -211,7 +213,7 @@ impl TaskRuns {
     fn push_alone(&mut self, cell: u32, tri: u32) {
         if cell == self.cell {
             self.close([self.cell, self.first, self.count]);
-            (self.cell, self.count) = (FREE[0], 0);
+            (self.cell, self.count) = (NO_CELL, 0);
         } else if self.open[slot(cell)][0] == cell {
             let run = std::mem::replace(&mut self.open[slot(cell)], FREE);
             self.close(run);
@@ -222,7 +224,7 @@ impl TaskRuns {
     /// Puts `run` (unless it is [`FREE`]) in its slab's list.
     #[inline(always)]
     fn close(&mut self, run: [u32; 3]) {
-        if run[0] != FREE[0] {
+        if run[0] != NO_CELL {
             self.slabs[(run[0] >> self.shift) as usize].push(self.code.pack(run));
         }
     }
@@ -268,10 +270,10 @@ impl RunCode {
         (run >> u32::BITS) as u32
     }
 
-    /// The first triangle and the count of a run (packed, or its `u32` half).
+    /// The first triangle and the count of a run (the low half of a packed one).
     #[inline]
-    fn triangles(&self, run: u64) -> [u32; 2] {
-        let run = run & u64::from(u32::MAX);
+    fn triangles(&self, run: u32) -> [u32; 2] {
+        let run = u64::from(run);
         [(run & ((1 << self.triangle_bits) - 1)) as u32, (run >> self.triangle_bits) as u32 + 1]
     }
 }
@@ -789,7 +791,7 @@ mod tests {
             let slabs = runs.finish();
             let mut listed: Vec<(u32, u32)> = Vec::new();
             for run in slabs.into_iter().flat_map(|slab| Segments::concat(vec![slab])).flatten() {
-                let [first, count] = code.triangles(run);
+                let [first, count] = code.triangles(run as u32);
                 assert!(count <= code.longest, "{count}");
                 listed.extend((first..first + count).map(|tri| (RunCode::cell(run), tri)));
             }
@@ -802,7 +804,7 @@ mod tests {
         let run = [u32::MAX - 1, 999, 1 << RUN_BITS];
         assert_eq!(code.longest, 1 << RUN_BITS);
         assert_eq!(
-            (RunCode::cell(code.pack(run)), code.triangles(code.pack(run))),
+            (RunCode::cell(code.pack(run)), code.triangles(code.pack(run) as u32)),
             (u32::MAX - 1, [999, 1 << RUN_BITS])
         );
     }
