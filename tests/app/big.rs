@@ -77,6 +77,8 @@ fn a_file_dropped_while_a_big_one_loads_is_served_beside_it() {
     let mut app = test_app(AppArgs { models: vec![path], no_shipped: true, ..default() });
     app.update();
     let big = app.world().resource::<ModelLibrary>().entries[0].progress.clone();
+    // The job lanes are the process's, shared with the other tests: the big job may wait for one before reading.
+    run_until(&mut app, Duration::from_secs(120), |_| big.stage() == Stage::Reading);
     app.world_mut().write_message(LibraryRequest::Add(shipped("apple.glb")));
     let apple_ready = |app: &mut App| {
         app.world().resource::<ModelLibrary>().entries.get(1).is_some_and(|e| e.status == ModelStatus::Ready)
