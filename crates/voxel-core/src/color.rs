@@ -144,7 +144,7 @@ pub fn flat_color(soup: &TriangleSoup, t: usize) -> Option<(u32, [f32; 4])> {
         return None;
     }
     let [a, b, c] = soup.triangle_colors(t);
-    (a == b && b == c).then_some((soup.triangle_parts[t], a))
+    (a == b && b == c).then_some((soup.part_of(t), a))
 }
 
 /// RGB (0..1) → HSL (each 0..1), as three.js `Color.getHSL`.

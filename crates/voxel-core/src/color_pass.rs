@@ -149,7 +149,7 @@ pub(crate) fn surface_colors(
     visible: &[u32],
     progress: &Progress,
 ) -> Vec<([u8; 4], u32)> {
-    let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.triangle_parts[t]);
+    let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.part_of(t));
     let mut colors = vec![NO_COLOR; visible.len()];
     // Each task walks its visible cells and the shell's cells side by side, colours each cell at once, and
     // returns the positions of the cells it could not colour.

@@ -370,9 +370,17 @@ impl TriangleSoup {
         self.triangle_parts.len()
     }
 
+    /// The part of triangle `t` (`triangle_parts[t]`). A soup of one part answers 0 without reading the list
+    /// ([`validate`](Self::validate) refuses any other value there): the colour pass asks for the part of a
+    /// triangle a cell, and a big model's list is megabytes that it would otherwise read a cache line a cell.
+    #[inline]
+    pub fn part_of(&self, t: usize) -> u32 {
+        if self.parts.len() == 1 { 0 } else { self.triangle_parts[t] }
+    }
+
     /// The material of triangle `t`.
     pub fn material_of(&self, t: usize) -> &Material {
-        &self.materials[self.parts[self.triangle_parts[t] as usize].material]
+        &self.materials[self.parts[self.part_of(t) as usize].material]
     }
 
     /// Checks the soup is usable: non-empty, finite, consistent indices.
@@ -542,5 +550,25 @@ mod tests {
         assert!(soup.validate().is_ok(), "the part without a material is used by no triangle");
         soup.positions[3 * bad + 1][2] = f32::INFINITY;
         assert!(matches!(soup.validate(), Err(VoxelError::NonFinite(name)) if name == "strip"));
+    }
+
+    #[test]
+    fn each_triangle_has_its_parts_material_in_a_soup_of_one_part_or_several() {
+        let corners = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(Vertex::at);
+        let mut soup = TriangleSoup::default();
+        let red = soup.add_material(Material { base_color: [1.0, 0.0, 0.0, 1.0], texture: None });
+        let only = soup.add_part(red, "only");
+        (0..3).for_each(|_| soup.push_triangle(only, corners));
+        assert_eq!((0..3).map(|t| soup.part_of(t)).collect::<Vec<_>>(), [0; 3]);
+        assert_eq!(soup.material_of(2).base_color, [1.0, 0.0, 0.0, 1.0]);
+
+        let blue = soup.add_material(Material { base_color: [0.0, 0.0, 1.0, 1.0], texture: None });
+        let second = soup.add_part(blue, "second");
+        soup.push_triangle(second, corners);
+        soup.push_triangle(only, corners);
+        assert_eq!((0..5).map(|t| soup.part_of(t)).collect::<Vec<_>>(), [0, 0, 0, 1, 0]);
+        let colors: Vec<[f32; 4]> = (0..5).map(|t| soup.material_of(t).base_color).collect();
+        assert_eq!(colors[3], [0.0, 0.0, 1.0, 1.0]);
+        assert_eq!(colors[4], [1.0, 0.0, 0.0, 1.0]);
     }
 }
