@@ -214,9 +214,12 @@ impl TaskRuns {
         if cell == self.cell {
             self.close([self.cell, self.first, self.count]);
             (self.cell, self.count) = (NO_CELL, 0);
-        } else if self.open[slot(cell)][0] == cell {
-            let run = std::mem::replace(&mut self.open[slot(cell)], FREE);
-            self.close(run);
+        } else {
+            let open = &mut self.open[slot(cell)];
+            if open[0] == cell {
+                let run = std::mem::replace(open, FREE);
+                self.close(run);
+            }
         }
         self.close([cell, tri, 1]);
     }
