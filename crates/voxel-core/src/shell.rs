@@ -558,22 +558,32 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
     let slabs: Vec<Vec<Vec<u64>>> = (0..slab_count)
         .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
         .collect();
-    let (mut cells, runs) = sorted_by_cell(slabs, shift);
-    let len = cells.len();
-    // Compressed rows: each group of equal cells becomes one cell, in place. (Room for the most offsets there can
-    // be: only the pages written are touched, where a growing list would copy itself into new ones.)
-    let mut offsets = Vec::with_capacity(len + 1);
-    let mut count = 0;
-    for k in 0..len {
-        if count == 0 || cells[count - 1] != cells[k] {
-            offsets.push(k as u32);
-            cells[count] = cells[k];
-            count += 1;
-        }
-    }
-    offsets.push(len as u32);
-    cells.truncate(count);
+    let (cells, runs) = sorted_by_cell(slabs, shift);
+    let (cells, offsets) = compressed(cells);
     Shell { cells, offsets, runs, code }
+}
+
+/// The compressed rows of ascending `cells`: each group of equal cells becomes one cell, in place, and the
+/// position where each group starts, with the length last.
+fn compressed(mut cells: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+    let len = cells.len();
+    // Room for the most offsets there can be, zeroed by the system: only the pages written are touched, where a
+    // growing list would copy itself into new ones.
+    let mut offsets = vec![0u32; len + 1];
+    let Some(&first) = cells.first() else { return (cells, vec![0]) };
+    // Without a branch on whether a cell starts a group (cells change every few positions, unpredictably): every
+    // position is written to the next slot, which only a new group's first position keeps.
+    let (mut count, mut last) = (1, first);
+    for k in 1..len {
+        let cell = cells[k];
+        (cells[count], offsets[count]) = (cell, k as u32);
+        count += usize::from(cell != last);
+        last = cell;
+    }
+    offsets[count] = len as u32;
+    offsets.truncate(count + 1);
+    cells.truncate(count);
+    (cells, offsets)
 }
 
 /// The runs of `slabs` (slab `k` holding the runs whose cell shifted right by `shift` is `k`, each cell's in order
@@ -621,6 +631,26 @@ mod tests {
     use crate::grid::GridSize;
     use crate::shapes::{torus, uv_sphere};
     use crate::soup::TriangleSoup;
+
+    #[test]
+    fn compressed_rows_keep_each_cell_once_with_where_its_group_starts() {
+        let mut random = crate::lcg::Lcg::new(5);
+        for len in [0, 1, 2, 7, 1000] {
+            for repeats in [1, 3, 50] {
+                let mut cells: Vec<u32> = (0..len).map(|_| random.below(len as u64 / repeats + 1) as u32).collect();
+                cells.sort_unstable();
+                let mut expected = (Vec::new(), Vec::new());
+                for (k, &c) in cells.iter().enumerate() {
+                    if expected.0.last() != Some(&c) {
+                        expected.0.push(c);
+                        expected.1.push(k as u32);
+                    }
+                }
+                expected.1.push(len as u32);
+                assert_eq!(compressed(cells), expected, "{len} cells, about {repeats} each");
+            }
+        }
+    }
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {

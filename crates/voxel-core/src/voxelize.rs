@@ -122,7 +122,7 @@ fn voxelize_within_timed(
         surface: shell.cells.len(),
         visible: visible.len(),
         // Interior voxels copy visible ones, so the visible cells hold every colour.
-        colors: distinct(colors.iter().map(|c| u32::from_le_bytes(c.0))),
+        colors: distinct(&colors),
     };
     let parts = soup.parts.iter().map(|p| p.name.clone()).collect();
     let solid = (!options.hollow).then_some(solid);
@@ -167,31 +167,64 @@ fn prepare<'a>(
     Ok((spec, tris))
 }
 
-/// The number of distinct values.
-fn distinct(values: impl Iterator<Item = u32>) -> usize {
+/// The number of distinct colours among `colors`.
+fn distinct(colors: &[([u8; 4], u32)]) -> usize {
+    distinct_sorted(colors).len()
+}
+
+/// The distinct colours among `colors` (as little-endian `u32`), ascending. A long list is split in halves that
+/// are counted side by side and merged: a model of many colours (vertex colours varying across every face) sorts
+/// each half on its own thread.
+fn distinct_sorted(colors: &[([u8; 4], u32)]) -> Vec<u32> {
+    if colors.len() > DISTINCT_SPLIT {
+        let (left, right) = colors.split_at(colors.len() / 2);
+        let (left, right) = rayon::join(|| distinct_sorted(left), || distinct_sorted(right));
+        return union(&left, &right);
+    }
     // Neighbouring cells often share a colour: repeats are dropped as the values are collected (a model of a few
     // flat colours writes a short list, not one as long as its cells).
     let mut runs: Vec<u32> = Vec::new();
-    for v in values {
+    for c in colors {
+        let v = u32::from_le_bytes(c.0);
         if runs.last() != Some(&v) {
             runs.push(v);
         }
     }
-    // Most models show a few colours (their materials, a palette of vertex colours): a small set counts them
-    // without sorting; past `SMALL_SET` of them, the runs are sorted.
+    // Most models show a few colours (their materials, a palette of vertex colours): a small set collects them
+    // without sorting the runs; past `SMALL_SET` of them, the runs are sorted.
     let mut seen = rustc_hash::FxHashSet::default();
     for &v in &runs {
         if seen.insert(v) && seen.len() > SMALL_SET {
             let mut values = radix::sort_by_key(runs, u32::BITS, |&v| v);
             values.dedup();
-            return values.len();
+            return values;
         }
     }
-    seen.len()
+    let mut values: Vec<u32> = seen.into_iter().collect();
+    values.sort_unstable();
+    values
 }
 
-/// The most distinct values [`distinct`] counts in a set.
+/// The union of two ascending lists without repeats, ascending and without repeats.
+fn union(a: &[u32], b: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let (x, y) = (a[i], b[j]);
+        out.push(x.min(y));
+        i += usize::from(x <= y);
+        j += usize::from(y <= x);
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
+/// The most distinct values [`distinct_sorted`] collects in a set.
 const SMALL_SET: usize = 1 << 10;
+
+/// Above this many colours, [`distinct_sorted`] counts the halves of a list side by side.
+const DISTINCT_SPLIT: usize = 1 << 15;
 
 /// The solid cells from the fill and the shell of `tris`, per the modes.
 fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &GridTriangles) -> BitGrid {
@@ -266,14 +299,24 @@ mod tests {
 
     #[test]
     fn distinct_values_are_counted_whether_few_or_many() {
-        // Runs of repeats and values seen again far apart, below and above the small set's size.
-        for kinds in [1, 7, SMALL_SET, SMALL_SET + 1, 50_000] {
-            let values: Vec<u32> =
-                (0..200_000u32).map(|k| (k / 3).wrapping_mul(2_654_435_761) % kinds as u32).collect();
-            let expected = values.iter().collect::<std::collections::HashSet<_>>().len();
-            assert_eq!(expected > SMALL_SET, kinds > SMALL_SET, "{expected} of {kinds} kinds");
-            assert_eq!(distinct(values.into_iter()), expected, "{kinds} kinds");
+        // Runs of repeats and values seen again far apart, below and above the small set's size, in lists short
+        // enough for one task and long enough to be split (the halves sharing colours, or one of a single colour).
+        let check = |values: Vec<u32>, case: &str| {
+            let colors: Vec<([u8; 4], u32)> = values.iter().map(|v| (v.to_le_bytes(), 0)).collect();
+            let expected: std::collections::BTreeSet<u32> = values.into_iter().collect();
+            assert_eq!(distinct_sorted(&colors), expected.iter().copied().collect::<Vec<_>>(), "{case}");
+            expected.len()
+        };
+        for len in [1_000u32, 200_000] {
+            for kinds in [1, 7, SMALL_SET, SMALL_SET + 1, 50_000] {
+                let values = (0..len).map(|k| (k / 3).wrapping_mul(2_654_435_761) % kinds as u32).collect();
+                let count = check(values, &format!("{kinds} kinds of {len}"));
+                assert!(len < 200_000 || (count > SMALL_SET) == (kinds > SMALL_SET), "{count} of {kinds} kinds");
+            }
         }
-        assert_eq!(distinct(std::iter::empty()), 0);
+        let halves = (0..200_000u32).map(|k| if k < 100_000 { 7 } else { k.wrapping_mul(2_654_435_761) % 50_000 });
+        assert!(check(halves.collect(), "one colour, then many") > SMALL_SET);
+        assert_eq!(distinct(&[]), 0);
+        assert_eq!(union(&[1, 4, 9], &[0, 4, 5, 9, 12]), [0, 1, 4, 5, 9, 12]);
     }
 }
