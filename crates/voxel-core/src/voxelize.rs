@@ -220,8 +220,9 @@ fn union_count(a: &[u32], b: &[u32]) -> usize {
 /// The most distinct values [`distinct_sorted`] collects in a set.
 const SMALL_SET: usize = 1 << 10;
 
-/// Above this many colours, [`distinct`] sorts the halves of the list side by side (below it, the second list and
-/// the pages it touches cost a fresh process more than the second thread saves).
+/// Above this many colours, [`distinct`] sorts the halves of the list side by side. (Below it a split measured no
+/// faster: the box of vertex colours at R=128, 96,776 colours, whose halves' lists are fresh pages in a fresh
+/// process.)
 const DISTINCT_SPLIT: usize = 1 << 17;
 
 /// The solid cells from the fill and the shell of `tris`, per the modes.
