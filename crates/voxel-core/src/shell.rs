@@ -567,8 +567,8 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
 /// position where each group starts, with the length last.
 fn compressed(mut cells: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let len = cells.len();
-    // Room for the most offsets there can be, zeroed by the system: only the pages written are touched, where a
-    // growing list would copy itself into new ones.
+    // Room for the most offsets there can be, zeroed by the allocator (a long list gets fresh pages from the system,
+    // untouched until written), where a growing list would copy itself into new ones.
     let mut offsets = vec![0u32; len + 1];
     let Some(&first) = cells.first() else { return (cells, vec![0]) };
     // Without a branch on whether a cell starts a group (cells change every few positions, unpredictably): every
