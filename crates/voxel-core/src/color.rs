@@ -108,21 +108,39 @@ fn round_to_u8(x: f32) -> u8 {
 /// texture, as sRGB RGBA8. COLOR_0 shared by the three corners is taken as it is, so an untextured triangle of
 /// one colour has that colour wherever it is sampled ([`flat_color`]).
 pub fn sample(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> [u8; 4] {
-    // The corners' colours, and their texture coordinates when there is a texture (not their positions).
+    shade(soup, t, w, texel(soup, t, w))
+}
+
+/// The weights as [`sample`] interpolates with them, and the interpolation: each sum in the corners' order, as
+/// `Iterator::sum` adds them (−0 + x = x, exactly).
+fn lerp(w: [f64; 3]) -> impl Fn(f32, f32, f32) -> f32 {
+    let [w0, w1, w2] = w.map(|w| w as f32);
+    move |x, y, z| w0 * x + w1 * y + w2 * z
+}
+
+/// The base-colour texel of triangle `t` at barycentric weights `w` (`None` for a material without a texture):
+/// the one memory read of [`sample`] that a large texture makes a cache miss, apart so that a caller can gather
+/// many before it shades them.
+pub fn texel(soup: &TriangleSoup, t: usize, w: [f64; 3]) -> Option<[u8; 4]> {
+    let binding = soup.material_of(t).texture.as_ref()?;
+    let lerp = lerp(w);
+    // The corners' texture coordinates (not their positions).
+    let [a, b, c] = soup.triangles()[t].map(|i| soup.uv(i as usize));
+    let uv = [lerp(a[0], b[0], c[0]), lerp(a[1], b[1], c[1])];
+    Some(binding.texture.sample_nearest(uv, binding.wrap))
+}
+
+/// [`sample`] with its [`texel`] read already.
+pub fn shade(soup: &TriangleSoup, t: usize, w: [f64; 3], texel: Option<[u8; 4]>) -> [u8; 4] {
     let [a, b, c] = soup.triangle_colors(t);
     let material = soup.material_of(t);
-    let [w0, w1, w2] = w.map(|w| w as f32);
-    // Each sum in the corners' order, as `Iterator::sum` adds them (−0 + x = x, exactly).
-    let lerp = |x: f32, y: f32, z: f32| w0 * x + w1 * y + w2 * z;
+    let lerp = lerp(w);
     let color = if a == b && b == c { a } else { std::array::from_fn(|ch| lerp(a[ch], b[ch], c[ch])) };
     let mut rgba = [0.0f32; 4];
     for (ch, out) in rgba.iter_mut().enumerate() {
         *out = material.base_color[ch] * color[ch];
     }
-    if let Some(binding) = &material.texture {
-        let [a, b, c] = soup.triangles()[t].map(|i| soup.uv(i as usize));
-        let uv = [lerp(a[0], b[0], c[0]), lerp(a[1], b[1], c[1])];
-        let texel = binding.texture.sample_nearest(uv, binding.wrap);
+    if let Some(texel) = texel {
         for ch in 0..3 {
             rgba[ch] *= srgb_to_linear(texel[ch]);
         }
@@ -277,6 +295,38 @@ mod tests {
             for c in 0..3 {
                 assert!((back[c] - rgb[c]).abs() < 1e-5, "{rgb:?} -> {back:?}");
             }
+        }
+    }
+
+    #[test]
+    fn a_sample_is_base_colour_times_corner_colours_times_the_texel_under_the_weighted_uv() {
+        use crate::soup::{Material, Texture, TextureBinding, Vertex, Wrap};
+        use std::sync::Arc;
+        // 4 × 1 texels: red, green, blue, white at half alpha.
+        let texels = vec![[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 128]];
+        let texture = Arc::new(Texture::new(4, 1, texels).unwrap());
+        let mut soup = TriangleSoup::default();
+        let plain = soup.add_material(Material { base_color: [0.5, 1.0, 1.0, 1.0], texture: None });
+        let textured = soup.add_material(Material {
+            base_color: [1.0, 1.0, 0.5, 1.0],
+            texture: Some(TextureBinding { texture, wrap: [Wrap::ClampToEdge; 2] }),
+        });
+        let corner = |x: f32, u: f32| Vertex { position: [x, 0.0, x * x], uv: [u, 0.5], color: [1.0; 4] };
+        let corners = [corner(0.0, 0.0), corner(1.0, 1.0), corner(2.0, 0.0)];
+        for material in [plain, textured] {
+            let part = soup.add_part(material, "part");
+            soup.push_triangle(part, corners);
+        }
+        // Weights (1/8, 7/16, 7/16): u = 7/16 lands in the second texel; (0, 1, 0): u = 1 clamps to the last.
+        let (w, corner_w) = ([0.125, 0.4375, 0.4375], [0.0, 1.0, 0.0]);
+        assert_eq!(texel(&soup, 0, w), None);
+        assert_eq!(sample(&soup, 0, w), [188, 255, 255, 255]);
+        assert_eq!(texel(&soup, 1, w), Some([0, 255, 0, 255]));
+        assert_eq!(sample(&soup, 1, w), [0, 255, 0, 255]);
+        assert_eq!(texel(&soup, 1, corner_w), Some([255, 255, 255, 128]));
+        assert_eq!(sample(&soup, 1, corner_w), [255, 255, 188, 128]);
+        for t in 0..2 {
+            assert_eq!(shade(&soup, t, w, texel(&soup, t, w)), sample(&soup, t, w));
         }
     }
 
