@@ -4,9 +4,9 @@
 Both sides run in a fresh process per run and time the same steps with their own clocks:
 * read: voxel-art's `load_ms` (file read, glTF parse, buffers, base-colour textures decoded) against Open3D's
   `io.read_triangle_mesh` (Assimp: file read, parse, textures);
-* voxelize: voxel-art's `voxelize_ms` (the first voxelization of the process; the CLI starts its thread pool
-  while it reads, so the pool's start falls in `read`) in two modes, side by side: equal work (`--fill none`:
-  the surface shell and its colours) and full work (the default: winding fill + shell + colour), against
+* voxelize: voxel-art's `voxelize_ms` (the first voxelization of the process; the CLI's main thread joins its
+  thread pool at start and the other worker comes up while it reads, so the pool's start falls in `read`) in two
+  modes, side by side: equal work (`--fill none`: the surface shell and its colours) and full work (the default: winding fill + shell + colour), against
   Open3D's first `VoxelGrid.create_from_triangle_mesh` (surface only, no colour) of the process, with the
   voxel size that gives R cells along the longest axis, as our `--resolution R` does. Open3D's second call in
   the same process is shown too (warm).

@@ -242,7 +242,7 @@ pub fn report_parse_error(error: &clap::Error) -> i32 {
 /// Makes the calling thread a worker of rayon's global thread pool, whose other workers start now (they come up
 /// while the first file is read). A pass's parallel work then starts on this thread while the others wake,
 /// where a thread outside the pool hands the work to a worker that may be asleep and waits for it (at each
-/// parallel step: a fresh run of a small model at R=128 took 30–45 % longer). For a program's main thread, which
+/// parallel step: a fresh run of a small model at R=128 took up to 45 % longer). For a program's main thread, which
 /// outlives every job; does nothing when the pool is already built.
 pub fn join_pool() {
     let _ = rayon::ThreadPoolBuilder::new().use_current_thread().build_global();
@@ -251,7 +251,7 @@ pub fn join_pool() {
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
 /// when any failed (each named on stderr as `error: <file>: <reason>`, after processing the others).
 pub fn execute(args: &VoxelizeArgs) -> i32 {
-    // Start the thread pool's workers now: they come up while the first file is read.
+    // Start the thread pool's workers now (unless `join_pool` has): they come up while the first file is read.
     rayon::spawn(|| ());
     let options = args.options();
     let colors = match args.palette.stage() {
