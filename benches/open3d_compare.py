@@ -6,10 +6,10 @@ Both sides run in a fresh process per run and time the same steps with their own
   `io.read_triangle_mesh` (Assimp: file read, parse, textures);
 * voxelize: voxel-art's `voxelize_ms` (the first voxelization of the process; the CLI's main thread joins its
   thread pool at start and the other worker comes up while it reads, so the pool's start falls in `read`) in two
-  modes, side by side: equal work (`--fill none`: the surface shell and its colours) and full work (the default: winding fill + shell + colour), against
-  Open3D's first `VoxelGrid.create_from_triangle_mesh` (surface only, no colour) of the process, with the
-  voxel size that gives R cells along the longest axis, as our `--resolution R` does. Open3D's second call in
-  the same process is shown too (warm).
+  modes, side by side: equal work (`--fill none`: the surface shell and its colours) and full work (the default:
+  winding fill + shell + colour), against Open3D's first `VoxelGrid.create_from_triangle_mesh` (surface only, no
+  colour) of the process, with the voxel size that gives R cells along the longest axis, as our `--resolution R`
+  does. Open3D's second call in the same process is shown too (warm).
 Neither side's interpreter or library start is timed (Python + `import open3d` takes ~1 s). Best of N runs
 each, interleaved so that load on a shared machine hits both alike. Prints a Markdown table with voxel-art's
 read speed (file bytes / `load_ms`) and the ratios Open3D ms / voxel-art ms for both modes; the last line is

@@ -251,8 +251,6 @@ pub fn join_pool() {
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
 /// when any failed (each named on stderr as `error: <file>: <reason>`, after processing the others).
 pub fn execute(args: &VoxelizeArgs) -> i32 {
-    // Start the thread pool's workers now (unless `join_pool` has): they come up while the first file is read.
-    rayon::spawn(|| ());
     let options = args.options();
     let colors = match args.palette.stage() {
         Ok(stage) => stage,
