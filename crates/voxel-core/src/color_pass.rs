@@ -68,7 +68,7 @@ fn nearest_among(
     let mut best = None;
     let mut candidates = candidates.peekable();
     while candidates.peek().is_some() {
-        // The first few candidates' boxes are measured only once there are more.
+        // The first few candidates are boxed only once there are more of them.
         let mut count = 0;
         for (slot, t) in boxes.iter_mut().zip(candidates.by_ref()) {
             let bound = if count < MEASURED_WITHOUT_BOXES { 0.0 } else { box_distance2(&tris.get(t), p) };
@@ -96,7 +96,7 @@ fn nearest_among(
 
 /// Measures the distance from `p` to triangle `t` and keeps it in `best` (triangle, squared distance, weights)
 /// if it is nearer, or as near with a lower index.
-#[inline(always)]
+#[inline]
 fn measure(tris: &GridTriangles, p: DVec3, t: usize, best: &mut Option<(usize, f64, [f64; 3])>) {
     let triangle = tris.get(t);
     let w = closest_point_barycentric(p, &triangle);
