@@ -9,7 +9,7 @@ use crate::geom::GridTriangle;
 use crate::grid::{GridSpec, GridTriangles};
 
 /// The axis along which the normal `n` is largest (the first of equals).
-pub(super) fn dominant_axis(n: DVec3) -> usize {
+fn dominant_axis(n: DVec3) -> usize {
     let an = n.abs();
     if an.x >= an.y && an.x >= an.z {
         0
