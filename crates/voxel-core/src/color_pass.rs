@@ -133,12 +133,8 @@ fn color_source(
     {
         return Some(Source::Flat(first, flat));
     }
-    let nearest = match rest.next() {
-        // One candidate is the nearest: no distance to compare.
-        None => (first, closest_point_barycentric(p, &tris.get(first))),
-        Some(_) => nearest_among(tris, p, candidates, boxes)?,
-    };
-    Some(Source::Nearest(nearest.0, nearest.1))
+    let (t, w) = nearest_among(tris, p, candidates, boxes)?;
+    Some(Source::Nearest(t, w))
 }
 
 /// The position of `target` in the ascending `cells` (`Ok`), or where it would be inserted (`Err`), searched
