@@ -165,49 +165,50 @@ pub(crate) fn shell(spec: &GridSpec, tris: &GridTriangles, progress: &Progress) 
     let slabs: Vec<Vec<Vec<u64>>> = (0..slab_count)
         .map(|slab| Segments::concat(lists.iter_mut().map(|task| std::mem::take(&mut task[slab])).collect()))
         .collect();
-    let (cells, runs) = sorted_by_cell(slabs, shift);
-    let (cells, offsets) = compressed(cells);
+    let (cells, offsets, runs) = sorted_by_cell(slabs, shift);
     Shell { cells, offsets, runs, code }
 }
 
-/// The compressed rows of ascending `cells`: each group of equal cells becomes one cell, in place, and the
-/// position where each group starts, with the length last.
-fn compressed(mut cells: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
-    let len = cells.len();
-    // Room for the most offsets there can be, zeroed by the allocator (a long list gets fresh pages from the system,
-    // untouched until written), where a growing list would copy itself into new ones.
-    let mut offsets = vec![0u32; len + 1];
-    let Some(&first) = cells.first() else { return (cells, vec![0]) };
+/// The compressed rows of ascending `cells` (the runs `base..` of the shell): each group of equal cells becomes one
+/// cell, in place, with the position of the run where the group starts in `offsets` beside it. Returns the groups.
+fn compress(cells: &mut [u32], offsets: &mut [u32], base: usize) -> usize {
+    let Some(&first) = cells.first() else { return 0 };
+    offsets[0] = base as u32;
     // Without a branch on whether a cell starts a group (cells change every few positions, unpredictably): every
     // position is written to the next slot, which only a new group's first position keeps.
     let (mut count, mut last) = (1, first);
-    for k in 1..len {
+    for k in 1..cells.len() {
         let cell = cells[k];
-        (cells[count], offsets[count]) = (cell, k as u32);
+        (cells[count], offsets[count]) = (cell, (base + k) as u32);
         count += usize::from(cell != last);
         last = cell;
     }
-    offsets[count] = len as u32;
-    offsets.truncate(count + 1);
-    cells.truncate(count);
-    (cells, offsets)
+    count
 }
 
 /// The runs of `slabs` (slab `k` holding the runs whose cell shifted right by `shift` is `k`, each cell's in order
-/// of triangles; packed by a [`RunCode`]), sorted by cell, split into their cells and their runs (the `u32` halves).
+/// of triangles; packed by a [`RunCode`]), sorted by cell, as compressed rows: the distinct cells ascending, where
+/// each cell's runs start (with their count last), and the runs (the `u32` halves).
 /// Consecutive slabs sort together until they hold enough runs to pay for a sort of their own, each sort on its own
 /// thread into its own stretch of the lists (its first slab's first cell as key 0); its last pass writes each run's
-/// halves to its position.
-fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>) {
+/// halves to its position, and the same task compresses its stretch's rows (no cell spans two stretches), which
+/// then close up.
+fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
     let len = slabs.iter().flatten().map(Vec::len).sum();
-    let (mut cells, mut runs) = (vec![0u32; len], vec![0u32; len]);
-    let (mut cells_left, mut runs_left) = (cells.as_mut_slice(), runs.as_mut_slice());
+    // Room for the most offsets there can be, zeroed by the allocator (a long list gets fresh pages from the system,
+    // untouched until written), where a growing list would copy itself into new ones.
+    let (mut cells, mut offsets, mut runs) = (vec![0u32; len], vec![0u32; len + 1], vec![0u32; len]);
+    // Enough runs for each thread to sort some, and no more than a sort pays for.
+    let target = len.div_ceil(rayon::current_num_threads()).clamp(1, RUNS_PER_SORT);
+    let (mut cells_left, mut offsets_left, mut runs_left) =
+        (cells.as_mut_slice(), &mut offsets[..len], runs.as_mut_slice());
     let mut sorts = Vec::new();
     let mut slabs = slabs.into_iter().enumerate();
+    let mut start = 0;
     while let Some((first, parts)) = slabs.next() {
         let mut group = parts;
         let mut end = first + 1;
-        while group.iter().map(Vec::len).sum::<usize>() < RUNS_PER_SORT {
+        while group.iter().map(Vec::len).sum::<usize>() < target {
             let Some((_, parts)) = slabs.next() else { break };
             group.extend(parts);
             end += 1;
@@ -215,20 +216,36 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>)
         let n = group.iter().map(Vec::len).sum();
         let (group_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
         cells_left = rest;
+        let (group_offsets, rest) = std::mem::take(&mut offsets_left).split_at_mut(n);
+        offsets_left = rest;
         let (group_runs, rest) = std::mem::take(&mut runs_left).split_at_mut(n);
         runs_left = rest;
         let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
-        sorts.push((group, base, span, group_cells, group_runs));
+        sorts.push((group, base, span, start, group_cells, group_offsets, group_runs));
+        start += n;
     }
-    sorts.into_par_iter().for_each(|(parts, base, span, cells, runs)| {
-        radix::sort_parts_into(
-            parts,
-            radix::bits_for(span as usize),
-            |&run| (u64::from(RunCode::cell(run)) - base) as u32,
-            |at, run| (cells[at], runs[at]) = (RunCode::cell(run), run as u32),
-        );
-    });
-    (cells, runs)
+    let groups: Vec<(usize, usize)> = sorts
+        .into_par_iter()
+        .map(|(parts, base, span, start, cells, offsets, runs)| {
+            radix::sort_parts_into(
+                parts,
+                radix::bits_for(span as usize),
+                |&run| (u64::from(RunCode::cell(run)) - base) as u32,
+                |at, run| (cells[at], runs[at]) = (RunCode::cell(run), run as u32),
+            );
+            (start, compress(cells, offsets, start))
+        })
+        .collect();
+    let mut count = 0;
+    for (start, groups) in groups {
+        cells.copy_within(start..start + groups, count);
+        offsets.copy_within(start..start + groups, count);
+        count += groups;
+    }
+    offsets[count] = len as u32;
+    cells.truncate(count);
+    offsets.truncate(count + 1);
+    (cells, offsets, runs)
 }
 
 #[cfg(test)]
@@ -249,11 +266,16 @@ mod tests {
                 for (k, &c) in cells.iter().enumerate() {
                     if expected.0.last() != Some(&c) {
                         expected.0.push(c);
-                        expected.1.push(k as u32);
+                        expected.1.push(40 + k as u32);
                     }
                 }
-                expected.1.push(len as u32);
-                assert_eq!(compressed(cells), expected, "{len} cells, about {repeats} each");
+                let mut offsets = vec![0; len];
+                let count = compress(&mut cells, &mut offsets, 40);
+                assert_eq!(
+                    (&cells[..count], &offsets[..count]),
+                    (&expected.0[..], &expected.1[..]),
+                    "{len}, {repeats}"
+                );
             }
         }
     }
@@ -283,7 +305,8 @@ mod tests {
         let mut soup = TriangleSoup::from_mesh(&uv_sphere(1.0, 160), [1.0; 4]);
         soup.add_mesh(&torus(1.6, 0.4, 24), [1.0; 4], "torus");
         soup.add_mesh(&crate::shapes::cuboid([-2.2; 3], [-1.2; 3]), [1.0; 4], "box");
-        for resolution in [12, 40] {
+        // At R=64 the grid has four slabs, sorted and compressed in a stretch per thread, which then close up.
+        for resolution in [12, 40, 64] {
             let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(resolution), 1.0, 1 << 26).unwrap();
             let tris = spec.grid_triangles(&soup);
             let shell = shell(&spec, &tris, &Progress::new());
@@ -293,7 +316,7 @@ mod tests {
             let overlaps: usize = expected.iter().map(|(_, tris)| tris.len()).sum();
             assert_eq!(got, expected, "R={resolution}");
             assert!(
-                shell.runs.len() * 3 < overlaps,
+                shell.runs.len() * 2 < overlaps,
                 "R={resolution}: {} runs of {overlaps} overlaps",
                 shell.runs.len()
             );
