@@ -13,6 +13,7 @@ use crate::color::{flat_color, pastel, sample, shade, texel};
 use crate::geom::{beyond, box_distance2, closest_point_barycentric, point_at};
 use crate::grid::{AscendingCoords, GridSpec, GridTriangles};
 use crate::progress::Progress;
+use crate::radix;
 use crate::shell::Shell;
 use crate::shell::distance::nearest_shell_cells;
 use crate::shell::octree::ShellOctree;
@@ -163,6 +164,34 @@ fn centre(c: [u32; 3]) -> DVec3 {
     DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
 }
 
+/// A visible cell that is a shell cell, queued for the colour pass's walk in the order of the triangles.
+#[derive(Clone, Copy, Debug, Default)]
+struct Queued {
+    /// The first triangle of its shell row: the walk's order.
+    first: u32,
+    /// Its position among the visible cells.
+    at: u32,
+    /// Its row in the shell.
+    row: u32,
+}
+
+/// From this many triangles on, and [`ORDERED_TRIANGLES_PER_CELL`] a visible cell, the colour pass walks the shell's
+/// cells in the order of their first triangle ([`surface_colors`]): about 10 MB of vertices, colours and corners,
+/// beyond the caches. (Below, the reorder's cost outweighed what it saved: fresh medians of 15 at R=128, the Fox
+/// 2.0 → 2.8 ms, the milk truck 5.6 → 6.4.)
+const ORDERED_TRIANGLES: usize = 1 << 18;
+
+/// The fewest triangles a visible cell for [`ORDERED_TRIANGLES`]: the reorder costs a sort and a scattered write a
+/// cell, and saves where each cell searches many triangles (the height field at R=256, 18 triangles a visible cell,
+/// each cell boxing 29 candidates: −11 ms); where cells search few it costs more than it saves (fresh medians of 5:
+/// spheres-1m at R=256, 0.25 triangles a cell, 652 → 876 ms; spheres-4m at R=128, 3.3 a cell, 629 → 700).
+const ORDERED_TRIANGLES_PER_CELL: usize = 8;
+
+/// The most bits of a queued cell's first triangle that order the walk: enough to walk a mesh's triangles in about
+/// the order they are stored (2¹² groups: a few hundred triangles each at a million, a quarter of a row of a
+/// 1000 × 1000 sheet), few enough for one counting pass.
+const ORDER_BITS: u32 = 12;
+
 /// The colour and part of every visible cell: the material colour at the closest point of the nearest
 /// triangle among the shell triangles of the cell, else of its face neighbours (where the surface crossing a
 /// face lies). A cell farther from the surface (only where a fill leaves a side of solid open to the outside:
@@ -179,14 +208,33 @@ pub(crate) fn surface_colors(
     visible: &[u32],
     progress: &Progress,
 ) -> Vec<([u8; 4], u32)> {
-    let color_at = |(t, w): (usize, [f64; 3])| (sample(soup, t, w), soup.part_of(t));
     let mut colors = vec![NO_COLOR; visible.len()];
-    // Each task walks its visible cells and the shell's cells side by side to find where each takes its colour,
-    // then reads their texels, then shades them, and returns the positions of the cells it could not colour.
-    // The texel reads of a large texture miss the caches: in a loop of their own, a few dozen instructions a
-    // cell, the reads of many cells are under way at once, where behind each cell's search they took turns
-    // (the milk truck's colours at R=128, 2,048² texels: 2.7 → 2.3 ms warm, 5.1 → 4.4 ms in a fresh process).
-    let far: Vec<usize> = colors
+    let far = if tris.len() < ORDERED_TRIANGLES || tris.len() < visible.len() * ORDERED_TRIANGLES_PER_CELL {
+        in_cell_order(soup, spec, tris, shell, visible, &mut colors, progress)
+    } else {
+        in_triangle_order(soup, spec, tris, shell, visible, &mut colors, progress)
+    };
+    if !far.is_empty() {
+        let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
+        for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, &cells)) {
+            colors[n] = nearest.map_or(NO_COLOR, |(t, w)| (sample(soup, t, w), soup.part_of(t)));
+        }
+    }
+    colors
+}
+
+/// [`surface_colors`] in tasks of ascending visible cells, each walking its cells and the shell's side by side;
+/// returns the positions of the cells without a source, ascending.
+fn in_cell_order(
+    soup: &TriangleSoup,
+    spec: &GridSpec,
+    tris: &GridTriangles,
+    shell: &Shell,
+    visible: &[u32],
+    colors: &mut [([u8; 4], u32)],
+    progress: &Progress,
+) -> Vec<usize> {
+    colors
         .par_chunks_mut(CELLS_PER_TASK)
         .zip(visible.par_chunks(CELLS_PER_TASK))
         .enumerate()
@@ -195,87 +243,166 @@ pub(crate) fn surface_colors(
             if progress.is_cancelled() {
                 return far;
             }
-            let sources = sources(soup, spec, tris, shell, chunk);
-            let texels: Vec<_> = sources
-                .iter()
-                .map(|source| match *source {
-                    Some(Source::Nearest(t, w)) => texel(soup, t, w),
-                    _ => None,
-                })
-                .collect();
-            let mut last_flat = None;
-            for (n, ((color, source), texel)) in out.iter_mut().zip(sources).zip(texels).enumerate() {
-                *color = match source {
-                    Some(Source::Nearest(t, w)) => (shade(soup, t, w, texel), soup.part_of(t)),
-                    // Neighbouring cells mostly share their flat colour: sampled once for a run of them.
-                    Some(Source::Flat(t, flat)) => match last_flat {
-                        Some((seen, color)) if seen == flat => color,
-                        _ => {
-                            let color = color_at((t, [1.0, 0.0, 0.0])); // any weights: its first corner
-                            last_flat = Some((flat, color));
-                            color
-                        }
-                    },
-                    None => {
-                        far.push(task * CELLS_PER_TASK + n);
-                        continue;
-                    }
-                };
+            let (_, sources) = walk(soup, spec, tris, shell, chunk, task * CELLS_PER_TASK, false);
+            let (at, sources): (Vec<usize>, Vec<Option<Source>>) = sources.into_iter().unzip();
+            for ((at, color), slot) in at.into_iter().zip(shaded(soup, sources)).zip(out) {
+                match color {
+                    Some(color) => *slot = color,
+                    None => far.push(at),
+                }
             }
             far
         })
-        .collect();
-    if !far.is_empty() {
-        let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
-        for (n, nearest) in far.into_iter().zip(nearest_far(spec, tris, shell, &cells)) {
-            colors[n] = nearest.map_or(NO_COLOR, color_at);
-        }
-    }
-    colors
+        .collect()
 }
 
-/// Where each of the ascending visible `cells` takes its colour ([`color_source`]): among the shell triangles of
-/// the cell, else of its face neighbours; `None` for a cell with neither.
-fn sources(
+/// [`surface_colors`] with the shell's cells in the order of their first triangle rather than of the cells: the
+/// searches then read the triangles' vertices and colours in about the order they are stored, where the cells'
+/// order (x, then y, then z) crosses a mesh whose rows run along another axis row after row (the height field at
+/// R=256, whose rows run along x: its equal work 116 → 105 ms fresh, as fast as the same sheet stored with its rows
+/// along z). Tasks of ascending cells queue each shell cell and find where any other takes its colour; the queued
+/// cells are sorted by their first triangle (stably: a group's cells ascend), tasks of them find theirs, and the
+/// colours go to their cells' positions. Returns the positions of the cells without a source, ascending.
+fn in_triangle_order(
+    soup: &TriangleSoup,
+    spec: &GridSpec,
+    tris: &GridTriangles,
+    shell: &Shell,
+    visible: &[u32],
+    colors: &mut [([u8; 4], u32)],
+    progress: &Progress,
+) -> Vec<usize> {
+    let (queued, others): (Vec<Vec<Queued>>, Vec<Vec<(usize, Option<([u8; 4], u32)>)>>) = visible
+        .par_chunks(CELLS_PER_TASK)
+        .enumerate()
+        .map(|(task, chunk)| {
+            let (queued, sources) = walk(soup, spec, tris, shell, chunk, task * CELLS_PER_TASK, true);
+            let (at, sources): (Vec<usize>, Vec<Option<Source>>) = sources.into_iter().unzip();
+            (queued, at.into_iter().zip(shaded(soup, sources)).collect())
+        })
+        .unzip();
+    let bits = radix::bits_for(tris.len()).min(ORDER_BITS);
+    let shift = radix::bits_for(tris.len()) - bits;
+    let queued = radix::sort_parts_by_key(queued, bits, |q| q.first >> shift);
+    let mut walked = vec![NO_COLOR; queued.len()];
+    walked.par_chunks_mut(CELLS_PER_TASK).zip(queued.par_chunks(CELLS_PER_TASK)).for_each(|(out, chunk)| {
+        if progress.is_cancelled() {
+            return;
+        }
+        let mut boxes = NO_BOXES;
+        let mut coords = AscendingCoords::new(spec);
+        let sources = chunk.iter().map(|q| {
+            let cell = coords.of(visible[q.at as usize]);
+            let candidates = shell.triangles_at(q.row as usize).map(|t| t as usize);
+            color_source(soup, tris, centre(cell), candidates, &mut boxes)
+        });
+        for (slot, color) in out.iter_mut().zip(shaded(soup, sources.collect())) {
+            *slot = color.unwrap_or(NO_COLOR); // (a shell row lists a triangle)
+        }
+    });
+    for (q, color) in queued.iter().zip(walked) {
+        colors[q.at as usize] = color;
+    }
+    let mut far = Vec::new();
+    for (at, color) in others.into_iter().flatten() {
+        match color {
+            Some(color) => colors[at] = color,
+            None => far.push(at),
+        }
+    }
+    far
+}
+
+/// The colour and part from each of `sources` (`None` where a cell has no source): the texels first, in a loop of
+/// their own, then the shading. (The texel reads of a large texture miss the caches: a few dozen instructions a
+/// cell, the reads of many cells are under way at once, where behind each cell's search they took turns: the milk
+/// truck's colours at R=128, 2,048² texels, 2.7 → 2.3 ms warm, 5.1 → 4.4 ms in a fresh process.)
+fn shaded(soup: &TriangleSoup, sources: Vec<Option<Source>>) -> impl Iterator<Item = Option<([u8; 4], u32)>> + '_ {
+    let texels: Vec<_> = sources
+        .iter()
+        .map(|source| match *source {
+            Some(Source::Nearest(t, w)) => texel(soup, t, w),
+            _ => None,
+        })
+        .collect();
+    let mut last_flat = None;
+    sources.into_iter().zip(texels).map(move |(source, texel)| {
+        source.map(|source| match source {
+            Source::Nearest(t, w) => (shade(soup, t, w, texel), soup.part_of(t)),
+            // Neighbouring cells mostly share their flat colour: sampled once for a run of them.
+            Source::Flat(t, flat) => match last_flat {
+                Some((seen, color)) if seen == flat => color,
+                _ => {
+                    let color = (sample(soup, t, [1.0, 0.0, 0.0]), soup.part_of(t)); // any weights: its first corner
+                    last_flat = Some((flat, color));
+                    color
+                }
+            },
+        })
+    })
+}
+
+/// Walks the ascending visible `cells` (at positions `base..` of the visible cells) and the shell's cells side by
+/// side: queues each shell cell when `defer`, and finds where every other cell takes its colour ([`color_source`]):
+/// among the shell triangles of the cell, else of its face neighbours (`None` for a cell with neither), with its
+/// position.
+fn walk(
     soup: &TriangleSoup,
     spec: &GridSpec,
     tris: &GridTriangles,
     shell: &Shell,
     cells: &[u32],
-) -> Vec<Option<Source>> {
+    base: usize,
+    defer: bool,
+) -> (Vec<Queued>, Vec<(usize, Option<Source>)>) {
     let mut coords = AscendingCoords::new(spec);
     let mut k = shell.cells.partition_point(|&c| c < cells[0]);
     // Where the last search for each face neighbour ended: the neighbours of ascending cells ascend, so each
     // search gallops a short way from there.
     let mut face_at = [k; 6];
-    let mut sources = Vec::with_capacity(cells.len());
+    let (mut queued, mut sources) = (Vec::new(), Vec::new());
+    if defer {
+        queued.reserve(cells.len());
+    } else {
+        sources.reserve(cells.len());
+    }
     let mut boxes = NO_BOXES;
-    for &i in cells {
+    for (n, &i) in cells.iter().enumerate() {
         while shell.cells.get(k).is_some_and(|&c| c < i) {
             k += 1;
         }
+        let at = base + n;
+        let in_shell = shell.cells.get(k) == Some(&i);
+        if in_shell && defer {
+            let first = shell.triangles_at(k).next().unwrap_or(0); // (a shell row lists a triangle)
+            queued.push(Queued { first, at: at as u32, row: k as u32 });
+            continue;
+        }
         let cell = coords.of(i);
         let p = centre(cell);
-        sources.push(if shell.cells.get(k) == Some(&i) {
-            color_source(soup, tris, p, shell.triangles_at(k).map(|t| t as usize), &mut boxes)
-        } else {
-            // The face neighbours' triangles, at most six lists.
-            let (mut near, mut found) = ([0; 6], 0);
-            for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
-                let Some(neighbour) = spec.neighbour(cell, step) else { continue };
-                match search_near(&shell.cells, *at, neighbour as u32) {
-                    Ok(k) => {
-                        (*at, near[found]) = (k, k);
-                        found += 1;
+        sources.push((
+            at,
+            if in_shell {
+                color_source(soup, tris, p, shell.triangles_at(k).map(|t| t as usize), &mut boxes)
+            } else {
+                // The face neighbours' triangles, at most six lists.
+                let (mut near, mut found) = ([0; 6], 0);
+                for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
+                    let Some(neighbour) = spec.neighbour(cell, step) else { continue };
+                    match search_near(&shell.cells, *at, neighbour as u32) {
+                        Ok(k) => {
+                            (*at, near[found]) = (k, k);
+                            found += 1;
+                        }
+                        Err(insert) => *at = insert,
                     }
-                    Err(insert) => *at = insert,
                 }
-            }
-            let candidates = near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|t| t as usize);
-            color_source(soup, tris, p, candidates, &mut boxes)
-        });
+                let candidates = near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|t| t as usize);
+                color_source(soup, tris, p, candidates, &mut boxes)
+            },
+        ));
     }
-    sources
+    (queued, sources)
 }
 
 /// For each of `cells`, the nearest triangle at the centre of the nearest shell cell and the barycentric
@@ -397,6 +524,58 @@ mod tests {
             assert_eq!((v.color, v.part), (sample(&soup, t, w), part), "cell {cell:?}");
         }
         assert!(far > 100, "{far} far cells");
+    }
+
+    #[test]
+    fn the_walk_in_the_order_of_the_triangles_colours_every_cell_as_the_walk_in_the_order_of_the_cells() {
+        use crate::shapes::cuboid;
+        use crate::soup::{Material, Vertex};
+        use crate::{FillMode, GridSize, VoxelizeOptions};
+        // An open sheet of hills coloured by height, its rows of triangles along x (the cells ascend along z), and a
+        // plain box through it; parity fills slabs whose sides lie far from the sheet (cells of no shell triangle).
+        let n = 40;
+        let vertex = |i: u32, j: u32| {
+            let (x, z) = (i as f32 / 4.0, j as f32 / 4.0);
+            let y = 0.8 * (0.9 * x).sin() * (0.7 * z).cos() + 0.3 * (2.3 * x + 1.1 * z).sin();
+            let t = (y + 1.1) / 2.2;
+            Vertex { color: [0.1 + 0.8 * t, 0.4 + 0.4 * (1.0 - t), 0.9 - 0.7 * t, 1.0], ..Vertex::at([x, y, z]) }
+        };
+        let mut soup = TriangleSoup::default();
+        let material = soup.add_material(Material::default());
+        let part = soup.add_part(material, "hills");
+        for (i, j) in (0..n).flat_map(|j| (0..n).map(move |i| (i, j))) {
+            soup.push_triangle(part, [vertex(i, j), vertex(i, j + 1), vertex(i + 1, j)]);
+            soup.push_triangle(part, [vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)]);
+        }
+        soup.add_mesh(&cuboid([3.0, -0.5, 3.0], [6.0, 0.5, 5.0]), [0.9, 0.3, 0.2, 1.0], "box");
+        let options = VoxelizeOptions { grid: GridSize::Resolution(48), fill: FillMode::Parity, ..Default::default() };
+        let model = crate::voxelize(&soup, &options).unwrap();
+        let spec = &model.spec;
+        let visible: Vec<u32> = model
+            .voxels()
+            .filter(|v| v.visible)
+            .map(|v| spec.index(u32::from(v.cell[0]), u32::from(v.cell[1]), u32::from(v.cell[2])) as u32)
+            .collect();
+        assert!(visible.is_sorted());
+        let tris = spec.grid_triangles(&soup);
+        let shell = crate::shell::shell(spec, &tris, &Progress::new());
+        let in_shell = visible.iter().filter(|&&i| shell.cells.binary_search(&i).is_ok()).count();
+        let mut by_cells = vec![NO_COLOR; visible.len()];
+        let far = in_cell_order(&soup, spec, &tris, &shell, &visible, &mut by_cells, &Progress::new());
+        let mut by_triangles = vec![NO_COLOR; visible.len()];
+        assert_eq!(in_triangle_order(&soup, spec, &tris, &shell, &visible, &mut by_triangles, &Progress::new()), far);
+        assert_eq!(by_triangles, by_cells);
+        assert!(
+            in_shell > 1000 && visible.len() > in_shell + far.len() + 100 && far.len() > 100,
+            "{} visible cells: {in_shell} in the shell, {} far",
+            visible.len(),
+            far.len()
+        );
+        // Every cell but the far ones (coloured afterwards) has its colour; the box's cells take its one colour.
+        let uncoloured: Vec<usize> = (0..visible.len()).filter(|&k| by_cells[k] == NO_COLOR).collect();
+        assert_eq!(uncoloured, far);
+        let boxed: Vec<_> = by_cells.iter().filter(|&&(_, p)| p == 1).collect();
+        assert!(boxed.len() > 100 && boxed.iter().all(|&&(c, _)| c == boxed[0].0), "{} cells of the box", boxed.len());
     }
 
     #[test]

@@ -429,8 +429,8 @@ impl BitGrid {
     }
 }
 
-/// The coordinates of ascending cells, each from the previous one's without a division when both lie in
-/// one column (as most neighbouring surface cells do).
+/// The coordinates of cells, each from the previous one's without a division when it lies above that one in the
+/// same column (as most neighbouring surface cells of an ascending list do).
 pub(crate) struct AscendingCoords<'a> {
     spec: &'a GridSpec,
     /// The last cell and its coordinates.
@@ -443,11 +443,11 @@ impl<'a> AscendingCoords<'a> {
         Self { spec, last: None }
     }
 
-    /// The coordinates of cell `i`, which is above every cell asked before.
+    /// The coordinates of cell `i`.
     #[inline]
     pub fn of(&mut self, i: u32) -> [u32; 3] {
         let c = match self.last {
-            Some((j, mut c)) if i - j < self.spec.dims[2] - c[2] => {
+            Some((j, mut c)) if i >= j && i - j < self.spec.dims[2] - c[2] => {
                 c[2] += i - j;
                 c
             }
@@ -547,8 +547,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(spec.dims, [5, 3, 7]);
-        // Every cell, then every third cell, then cells straddling column ends.
-        for cells in [(0..105).collect::<Vec<u32>>(), (0..105).step_by(3).collect(), vec![5, 6, 7, 13, 14, 21, 104]] {
+        // Every cell, then every third cell, then cells straddling column ends and going back.
+        for cells in
+            [(0..105).collect::<Vec<u32>>(), (0..105).step_by(3).collect(), vec![5, 6, 7, 13, 14, 21, 104, 3, 0, 1]]
+        {
             let mut coords = AscendingCoords::new(&spec);
             for i in cells {
                 assert_eq!(coords.of(i), spec.coords(i as usize), "cell {i}");
