@@ -164,6 +164,15 @@ fn centre(c: [u32; 3]) -> DVec3 {
     DVec3::new(f64::from(c[0]) + 0.5, f64::from(c[1]) + 0.5, f64::from(c[2]) + 0.5)
 }
 
+/// What the colour walks read: the soup, its triangles on the grid and their shell.
+#[derive(Clone, Copy)]
+struct Surface<'a> {
+    soup: &'a TriangleSoup,
+    spec: &'a GridSpec,
+    tris: &'a GridTriangles<'a>,
+    shell: &'a Shell,
+}
+
 /// A visible cell that is a shell cell, queued for the colour pass's walk in the order of the triangles.
 #[derive(Clone, Copy, Debug, Default)]
 struct Queued {
@@ -209,10 +218,11 @@ pub(crate) fn surface_colors(
     progress: &Progress,
 ) -> Vec<([u8; 4], u32)> {
     let mut colors = vec![NO_COLOR; visible.len()];
+    let surface = Surface { soup, spec, tris, shell };
     let far = if tris.len() < ORDERED_TRIANGLES || tris.len() < visible.len() * ORDERED_TRIANGLES_PER_CELL {
-        in_cell_order(soup, spec, tris, shell, visible, &mut colors, progress)
+        in_cell_order(surface, visible, &mut colors, progress)
     } else {
-        in_triangle_order(soup, spec, tris, shell, visible, &mut colors, progress)
+        in_triangle_order(surface, visible, &mut colors, progress)
     };
     if !far.is_empty() {
         let cells: Vec<u32> = far.iter().map(|&n| visible[n]).collect();
@@ -225,15 +235,7 @@ pub(crate) fn surface_colors(
 
 /// [`surface_colors`] in tasks of ascending visible cells, each walking its cells and the shell's side by side;
 /// returns the positions of the cells without a source, ascending.
-fn in_cell_order(
-    soup: &TriangleSoup,
-    spec: &GridSpec,
-    tris: &GridTriangles,
-    shell: &Shell,
-    visible: &[u32],
-    colors: &mut [([u8; 4], u32)],
-    progress: &Progress,
-) -> Vec<usize> {
+fn in_cell_order(surface: Surface, visible: &[u32], colors: &mut [([u8; 4], u32)], progress: &Progress) -> Vec<usize> {
     colors
         .par_chunks_mut(CELLS_PER_TASK)
         .zip(visible.par_chunks(CELLS_PER_TASK))
@@ -243,12 +245,11 @@ fn in_cell_order(
             if progress.is_cancelled() {
                 return far;
             }
-            let (_, sources) = walk(soup, spec, tris, shell, chunk, task * CELLS_PER_TASK, false);
-            let (at, sources): (Vec<usize>, Vec<Option<Source>>) = sources.into_iter().unzip();
-            for ((at, color), slot) in at.into_iter().zip(shaded(soup, sources)).zip(out) {
+            let (_, _, sources) = walk(surface, chunk, task * CELLS_PER_TASK, false);
+            for (n, (color, slot)) in shaded(surface.soup, sources).zip(out).enumerate() {
                 match color {
                     Some(color) => *slot = color,
-                    None => far.push(at),
+                    None => far.push(task * CELLS_PER_TASK + n),
                 }
             }
             far
@@ -259,25 +260,23 @@ fn in_cell_order(
 /// [`surface_colors`] with the shell's cells in the order of their first triangle rather than of the cells: the
 /// searches then read the triangles' vertices and colours in about the order they are stored, where the cells'
 /// order (x, then y, then z) crosses a mesh whose rows run along another axis row after row (the height field at
-/// R=256, whose rows run along x: its equal work 116 → 105 ms fresh, as fast as the same sheet stored with its rows
-/// along z). Tasks of ascending cells queue each shell cell and find where any other takes its colour; the queued
-/// cells are sorted by their first triangle (stably: a group's cells ascend), tasks of them find theirs, and the
-/// colours go to their cells' positions. Returns the positions of the cells without a source, ascending.
+/// R=256, whose rows run along x: its equal work 117.5 → 103.5 ms, fresh medians of 11, about as fast as the same
+/// sheet stored with its rows along z). Tasks of ascending cells queue each shell cell and find where any other
+/// takes its colour; the queued cells are sorted by their first triangle (stably: a group's cells ascend), tasks of
+/// them find theirs, and the colours go to their cells' positions. Returns the positions of the cells without a
+/// source, ascending.
 fn in_triangle_order(
-    soup: &TriangleSoup,
-    spec: &GridSpec,
-    tris: &GridTriangles,
-    shell: &Shell,
+    surface: Surface,
     visible: &[u32],
     colors: &mut [([u8; 4], u32)],
     progress: &Progress,
 ) -> Vec<usize> {
+    let Surface { soup, spec, tris, shell } = surface;
     let (queued, others): (Vec<Vec<Queued>>, Vec<Vec<(usize, Option<([u8; 4], u32)>)>>) = visible
         .par_chunks(CELLS_PER_TASK)
         .enumerate()
         .map(|(task, chunk)| {
-            let (queued, sources) = walk(soup, spec, tris, shell, chunk, task * CELLS_PER_TASK, true);
-            let (at, sources): (Vec<usize>, Vec<Option<Source>>) = sources.into_iter().unzip();
+            let (queued, at, sources) = walk(surface, chunk, task * CELLS_PER_TASK, true);
             (queued, at.into_iter().zip(shaded(soup, sources)).collect())
         })
         .unzip();
@@ -343,24 +342,17 @@ fn shaded(soup: &TriangleSoup, sources: Vec<Option<Source>>) -> impl Iterator<It
 }
 
 /// Walks the ascending visible `cells` (at positions `base..` of the visible cells) and the shell's cells side by
-/// side: queues each shell cell when `defer`, and finds where every other cell takes its colour ([`color_source`]):
-/// among the shell triangles of the cell, else of its face neighbours (`None` for a cell with neither), with its
-/// position.
-fn walk(
-    soup: &TriangleSoup,
-    spec: &GridSpec,
-    tris: &GridTriangles,
-    shell: &Shell,
-    cells: &[u32],
-    base: usize,
-    defer: bool,
-) -> (Vec<Queued>, Vec<(usize, Option<Source>)>) {
+/// side, and finds where each cell takes its colour ([`color_source`]): among the shell triangles of the cell, else
+/// of its face neighbours (`None` for a cell with neither). With `defer`, each shell cell is queued instead, and the
+/// others' sources come with their positions; without, every cell's source comes in order.
+fn walk(surface: Surface, cells: &[u32], base: usize, defer: bool) -> (Vec<Queued>, Vec<usize>, Vec<Option<Source>>) {
+    let Surface { soup, spec, tris, shell } = surface;
     let mut coords = AscendingCoords::new(spec);
     let mut k = shell.cells.partition_point(|&c| c < cells[0]);
     // Where the last search for each face neighbour ended: the neighbours of ascending cells ascend, so each
     // search gallops a short way from there.
     let mut face_at = [k; 6];
-    let (mut queued, mut sources) = (Vec::new(), Vec::new());
+    let (mut queued, mut positions, mut sources) = (Vec::new(), Vec::new(), Vec::new());
     if defer {
         queued.reserve(cells.len());
     } else {
@@ -380,29 +372,29 @@ fn walk(
         }
         let cell = coords.of(i);
         let p = centre(cell);
-        sources.push((
-            at,
-            if in_shell {
-                color_source(soup, tris, p, shell.triangles_at(k).map(|t| t as usize), &mut boxes)
-            } else {
-                // The face neighbours' triangles, at most six lists.
-                let (mut near, mut found) = ([0; 6], 0);
-                for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
-                    let Some(neighbour) = spec.neighbour(cell, step) else { continue };
-                    match search_near(&shell.cells, *at, neighbour as u32) {
-                        Ok(k) => {
-                            (*at, near[found]) = (k, k);
-                            found += 1;
-                        }
-                        Err(insert) => *at = insert,
+        if defer {
+            positions.push(at);
+        }
+        sources.push(if in_shell {
+            color_source(soup, tris, p, shell.triangles_at(k).map(|t| t as usize), &mut boxes)
+        } else {
+            // The face neighbours' triangles, at most six lists.
+            let (mut near, mut found) = ([0; 6], 0);
+            for (step, at) in FACE_STEPS.into_iter().zip(&mut face_at) {
+                let Some(neighbour) = spec.neighbour(cell, step) else { continue };
+                match search_near(&shell.cells, *at, neighbour as u32) {
+                    Ok(k) => {
+                        (*at, near[found]) = (k, k);
+                        found += 1;
                     }
+                    Err(insert) => *at = insert,
                 }
-                let candidates = near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|t| t as usize);
-                color_source(soup, tris, p, candidates, &mut boxes)
-            },
-        ));
+            }
+            let candidates = near[..found].iter().flat_map(|&at| shell.triangles_at(at)).map(|t| t as usize);
+            color_source(soup, tris, p, candidates, &mut boxes)
+        });
     }
-    (queued, sources)
+    (queued, positions, sources)
 }
 
 /// For each of `cells`, the nearest triangle at the centre of the nearest shell cell and the barycentric
@@ -482,11 +474,10 @@ mod tests {
         assert_eq!(search_near(&[], 0, 4), Err(0));
     }
 
-    #[test]
-    fn far_cells_take_the_color_of_the_nearest_shell_cell() {
+    /// An open sheet of hills over 40 × 40 quads coloured by height, part 0 of the soup, its rows of triangles
+    /// along x.
+    fn hills() -> TriangleSoup {
         use crate::soup::{Material, Vertex};
-        use crate::{FillMode, GridSize, VoxelizeOptions};
-        // An open sheet of hills coloured by height: parity fills slabs whose sides lie far from the sheet.
         let n = 40;
         let vertex = |i: u32, j: u32| {
             let (x, z) = (i as f32 / 4.0, j as f32 / 4.0);
@@ -501,6 +492,14 @@ mod tests {
             soup.push_triangle(part, [vertex(i, j), vertex(i, j + 1), vertex(i + 1, j)]);
             soup.push_triangle(part, [vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)]);
         }
+        soup
+    }
+
+    #[test]
+    fn far_cells_take_the_color_of_the_nearest_shell_cell() {
+        use crate::{FillMode, GridSize, VoxelizeOptions};
+        // Parity fills slabs whose sides lie far from the open sheet.
+        let (soup, part) = (hills(), 0);
         let options = VoxelizeOptions { grid: GridSize::Resolution(48), fill: FillMode::Parity, ..Default::default() };
         let model = crate::voxelize(&soup, &options).unwrap();
         let spec = &model.spec;
@@ -529,24 +528,10 @@ mod tests {
     #[test]
     fn the_walk_in_the_order_of_the_triangles_colours_every_cell_as_the_walk_in_the_order_of_the_cells() {
         use crate::shapes::cuboid;
-        use crate::soup::{Material, Vertex};
         use crate::{FillMode, GridSize, VoxelizeOptions};
-        // An open sheet of hills coloured by height, its rows of triangles along x (the cells ascend along z), and a
-        // plain box through it; parity fills slabs whose sides lie far from the sheet (cells of no shell triangle).
-        let n = 40;
-        let vertex = |i: u32, j: u32| {
-            let (x, z) = (i as f32 / 4.0, j as f32 / 4.0);
-            let y = 0.8 * (0.9 * x).sin() * (0.7 * z).cos() + 0.3 * (2.3 * x + 1.1 * z).sin();
-            let t = (y + 1.1) / 2.2;
-            Vertex { color: [0.1 + 0.8 * t, 0.4 + 0.4 * (1.0 - t), 0.9 - 0.7 * t, 1.0], ..Vertex::at([x, y, z]) }
-        };
-        let mut soup = TriangleSoup::default();
-        let material = soup.add_material(Material::default());
-        let part = soup.add_part(material, "hills");
-        for (i, j) in (0..n).flat_map(|j| (0..n).map(move |i| (i, j))) {
-            soup.push_triangle(part, [vertex(i, j), vertex(i, j + 1), vertex(i + 1, j)]);
-            soup.push_triangle(part, [vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)]);
-        }
+        // The hills, whose rows run along x where the cells ascend along z, and a plain box through them; parity
+        // fills slabs whose sides lie far from the sheet (cells of no shell triangle).
+        let mut soup = hills();
         soup.add_mesh(&cuboid([3.0, -0.5, 3.0], [6.0, 0.5, 5.0]), [0.9, 0.3, 0.2, 1.0], "box");
         let options = VoxelizeOptions { grid: GridSize::Resolution(48), fill: FillMode::Parity, ..Default::default() };
         let model = crate::voxelize(&soup, &options).unwrap();
@@ -561,9 +546,10 @@ mod tests {
         let shell = crate::shell::shell(spec, &tris, &Progress::new());
         let in_shell = visible.iter().filter(|&&i| shell.cells.binary_search(&i).is_ok()).count();
         let mut by_cells = vec![NO_COLOR; visible.len()];
-        let far = in_cell_order(&soup, spec, &tris, &shell, &visible, &mut by_cells, &Progress::new());
+        let surface = Surface { soup: &soup, spec, tris: &tris, shell: &shell };
+        let far = in_cell_order(surface, &visible, &mut by_cells, &Progress::new());
         let mut by_triangles = vec![NO_COLOR; visible.len()];
-        assert_eq!(in_triangle_order(&soup, spec, &tris, &shell, &visible, &mut by_triangles, &Progress::new()), far);
+        assert_eq!(in_triangle_order(surface, &visible, &mut by_triangles, &Progress::new()), far);
         assert_eq!(by_triangles, by_cells);
         assert!(
             in_shell > 1000 && visible.len() > in_shell + far.len() + 100 && far.len() > 100,
