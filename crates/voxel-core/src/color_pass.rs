@@ -276,6 +276,9 @@ fn in_triangle_order(
         .par_chunks(CELLS_PER_TASK)
         .enumerate()
         .map(|(task, chunk)| {
+            if progress.is_cancelled() {
+                return Default::default();
+            }
             let (queued, at, sources) = walk(surface, chunk, task * CELLS_PER_TASK, true);
             (queued, at.into_iter().zip(shaded(soup, sources)).collect())
         })

@@ -112,7 +112,8 @@ const SLAB_BITS: u32 = 6;
 /// tasks starts fewer lists (a list's first segment is 512 bytes: at R=128 a model's 24 tasks started 1,536).
 const SLAB_CELL_BITS: u32 = 16;
 
-/// The runs below which consecutive slabs of [`shell`] sort together.
+/// The runs below which consecutive slabs of [`shell`] sort together (fewer when a thread would be left without a
+/// sort: [`sorted_by_cell`]).
 const RUNS_PER_SORT: usize = 1 << 16;
 
 /// Shell cells per task of [`Shell::thin_cells`] (a few bit reads each: small tasks cost more than they save).
@@ -214,19 +215,14 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>,
             end += 1;
         }
         let n = group.iter().map(Vec::len).sum();
-        let (group_cells, rest) = std::mem::take(&mut cells_left).split_at_mut(n);
-        cells_left = rest;
-        let (group_offsets, rest) = std::mem::take(&mut offsets_left).split_at_mut(n);
-        offsets_left = rest;
-        let (group_runs, rest) = std::mem::take(&mut runs_left).split_at_mut(n);
-        runs_left = rest;
         let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
-        sorts.push((group, base, span, start, group_cells, group_offsets, group_runs));
+        let lists = [&mut cells_left, &mut offsets_left, &mut runs_left].map(|rest| take_front(rest, n));
+        sorts.push((group, base, span, start, lists));
         start += n;
     }
     let groups: Vec<(usize, usize)> = sorts
         .into_par_iter()
-        .map(|(parts, base, span, start, cells, offsets, runs)| {
+        .map(|(parts, base, span, start, [cells, offsets, runs])| {
             radix::sort_parts_into(
                 parts,
                 radix::bits_for(span as usize),
@@ -246,6 +242,13 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>,
     cells.truncate(count);
     offsets.truncate(count + 1);
     (cells, offsets, runs)
+}
+
+/// The first `n` items of `rest`, which keeps the others.
+fn take_front<'a>(rest: &mut &'a mut [u32], n: usize) -> &'a mut [u32] {
+    let (front, others) = std::mem::take(rest).split_at_mut(n);
+    *rest = others;
+    front
 }
 
 #[cfg(test)]
