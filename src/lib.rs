@@ -125,7 +125,7 @@ impl Plugin for ShowPlugin {
 pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
     match config::Cli::parse_args(args) {
         Ok(config::Cli { command: Some(config::Command::Voxelize(voxelize)), .. }) => {
-            voxel_core::cli::join_pool();
+            voxel_core::cli::prepare_process();
             voxel_core::cli::execute(&voxelize)
         }
         Ok(config::Cli { command: None, app }) => run_app(app),

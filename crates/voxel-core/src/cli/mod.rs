@@ -18,7 +18,10 @@ use report::{Exported, stem, to_json};
 
 pub mod animation;
 pub mod palette;
+mod process;
 mod report;
+
+pub use process::prepare_process;
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
 /// through [`run`].
@@ -237,15 +240,6 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> i32 {
 pub fn report_parse_error(error: &clap::Error) -> i32 {
     let _ = error.print();
     if error.use_stderr() { 2 } else { 0 }
-}
-
-/// Makes the calling thread a worker of rayon's global thread pool, whose other workers start now (they come up
-/// while the first file is read). A pass's parallel work then starts on this thread while the others wake,
-/// where a thread outside the pool hands the work to a worker that may be asleep and waits for it (at each
-/// parallel step: a fresh run of a small model at R=128 took up to 45 % longer). For a program's main thread, which
-/// outlives every job; does nothing when the pool is already built.
-pub fn join_pool() {
-    let _ = rayon::ThreadPoolBuilder::new().use_current_thread().build_global();
 }
 
 /// Voxelizes (and exports) every file `args` names. Returns the exit status: 0 when every file succeeded, 1
