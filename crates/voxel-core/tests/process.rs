@@ -34,3 +34,38 @@ fn a_block_freed_before_is_reused_without_page_faults() {
     assert!(first > pages / 2, "the first touch of {pages} pages took {first} faults");
     assert!(second < pages / 16, "the second touch of {pages} pages took {second} faults (the first {first})");
 }
+
+/// The user and system CPU time of thread `tid` of this process so far, in clock ticks (`utime` + `stime`, the
+/// 14th and 15th fields of its `stat`).
+fn cpu_ticks(tid: &str) -> u64 {
+    let stat = std::fs::read_to_string(format!("/proc/self/task/{tid}/stat")).expect("a thread's stat");
+    let fields: Vec<&str> = stat.rsplit_once(')').expect("a command name").1.split_whitespace().collect();
+    fields[11].parse::<u64>().expect("utime") + fields[12].parse::<u64>().expect("stime")
+}
+
+#[test]
+fn the_other_workers_spin_while_the_work_runs_and_stop_when_it_returns() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("a pool");
+    // Each worker's thread id: the first field of its own stat.
+    let tids: Vec<String> = pool.broadcast(|_| {
+        let stat = std::fs::read_to_string("/proc/thread-self/stat").expect("/proc/thread-self/stat");
+        stat.split_whitespace().next().expect("a thread id").to_string()
+    });
+    let cpu = || tids.iter().map(|tid| cpu_ticks(tid)).sum::<u64>();
+    let pause = std::time::Duration::from_millis(300);
+    let (during, after) = pool.install(|| {
+        let start = cpu();
+        // The caller (a worker) sleeps: only the other worker, kept awake, uses CPU meanwhile.
+        let value = voxel_core::cli::with_workers_awake(|| {
+            std::thread::sleep(pause);
+            7
+        });
+        assert_eq!(value, 7);
+        let returned = cpu();
+        std::thread::sleep(pause);
+        (returned - start, cpu() - returned)
+    });
+    // 300 ms is 30 ticks at the usual 100 a second: the awake worker takes most of them, then none.
+    assert!(during >= 10, "{during} ticks of CPU while the work ran");
+    assert!(after <= 3, "{after} ticks of CPU after it returned");
+}

@@ -21,7 +21,7 @@ pub mod palette;
 mod process;
 mod report;
 
-pub use process::prepare_process;
+pub use process::{prepare_process, with_workers_awake};
 
 /// The arguments of `voxel-art voxelize`: a clap subcommand of the app's command line, or a command of its own
 /// through [`run`].
@@ -174,7 +174,7 @@ pub(crate) fn process(
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
-    let mut model = voxelize(&soup, options)?;
+    let mut model = with_workers_awake(|| voxelize(&soup, options))?;
     colors.apply(&mut model)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
