@@ -1,5 +1,6 @@
-//! The command line's process set-up (`cli::prepare_process`), in a process of its own: after it, memory that was
-//! freed is handed out again without a page fault.
+//! The command line's process set-up, in a process of its own: after `cli::prepare_process`, memory that was freed is
+//! handed out again without a page fault; within `cli::with_workers_awake`, the pool's other workers spin, and they
+//! stop when it returns.
 #![cfg(all(feature = "cli", target_os = "linux", target_env = "gnu"))]
 
 /// This process's minor page faults so far (`minflt`, the 10th field of `/proc/self/stat`).
