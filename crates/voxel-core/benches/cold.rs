@@ -1,6 +1,7 @@
 //! `cargo bench -p voxel-core --bench cold`: what a fresh process pays before its first voxelization is as
 //! fast as the next ones (issue 13: "thread-pool start, first-touch of big allocations"), with the system
-//! allocator, as the command line. The bench starts itself once per sample (medians
+//! allocator's defaults, as a program embedding the library gets them (the command line keeps freed memory:
+//! `cli::prepare_process`). The bench starts itself once per sample (medians
 //! of 7) and reports the thread pool's start, the first voxelization, the warm median of the same soup again
 //! (its part analysis cached) and of soups the process has not seen (what a fresh process's first
 //! voxelization does too), and the overhead: pool start + first − warm of a new soup (the pool's threads, the
