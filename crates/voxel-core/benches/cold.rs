@@ -36,14 +36,6 @@ const COLD_MODELS: [(&str, Option<u32>); 4] = [
     ("khronos-flighthelmet/FlightHelmet.gltf", Some(128)),
 ];
 
-/// Minor page faults of this process so far (Linux: field 10 of /proc/self/stat; 0 elsewhere).
-fn minor_faults() -> u64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // The fields after the command name, which is in parentheses and may hold spaces: minflt is the eighth.
-    let fields = stat.rfind(')').map_or("", |end| &stat[end + 1..]);
-    fields.split_whitespace().nth(7).and_then(|f| f.parse().ok()).unwrap_or(0)
-}
-
 /// In a fresh process: the thread pool's start, the first voxelization, the median of the next five and that
 /// of five voxelizations of soups not seen before (the model loaded again), in ms of wall time, then
 /// the same in CPU time, then the first voxelization's minor page faults.
@@ -53,9 +45,9 @@ fn cold_child(file: &Path, r: Option<u32>) {
     let (cpu_start, started) = (cpu::cpu_ns().unwrap_or(0), Instant::now());
     rayon::join(|| (), || ());
     let (pool_cpu, pool) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3);
-    let faults = minor_faults();
+    let faults = cpu::minor_faults();
     voxelize(&soup, &options).expect("voxelize");
-    let faults = minor_faults() - faults;
+    let faults = cpu::minor_faults() - faults;
     let (first_cpu, first) = (cpu::cpu_ns().unwrap_or(0), started.elapsed().as_secs_f64() * 1e3 - pool);
     let (warm, _) = measure(&soup, &options, 5);
     // Loaded again: soups the voxelizer has not seen (no part analysis yet), as the importer makes them.

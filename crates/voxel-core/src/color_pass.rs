@@ -283,9 +283,9 @@ fn in_triangle_order(
             (queued, at.into_iter().zip(shaded(soup, sources)).collect())
         })
         .unzip();
-    let bits = radix::bits_for(tris.len()).min(ORDER_BITS);
-    let shift = radix::bits_for(tris.len()) - bits;
-    let queued = radix::sort_parts_by_key(queued, bits, |q| q.first >> shift);
+    let all = radix::bits_for(tris.len());
+    let shift = all - all.min(ORDER_BITS);
+    let queued = radix::sort_parts_by_key(queued, all - shift, |q| q.first >> shift);
     let mut walked = vec![NO_COLOR; queued.len()];
     walked.par_chunks_mut(CELLS_PER_TASK).zip(queued.par_chunks(CELLS_PER_TASK)).for_each(|(out, chunk)| {
         if progress.is_cancelled() {

@@ -90,6 +90,16 @@ impl Progress {
     }
 }
 
+/// Sets its flag when dropped: the work it guards is over, however it ended (the pipeline's passes, whose part
+/// analysis started beside them then stops; the command line's voxelization, whose awake workers then sleep).
+pub(crate) struct Settle<'a>(pub(crate) &'a AtomicBool);
+
+impl Drop for Settle<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -207,14 +207,15 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>,
     let mut slabs = slabs.into_iter().enumerate();
     let mut start = 0;
     while let Some((first, parts)) = slabs.next() {
-        let mut group = parts;
+        let count = |parts: &Vec<Vec<u64>>| parts.iter().map(Vec::len).sum::<usize>();
+        let (mut n, mut group) = (count(&parts), parts);
         let mut end = first + 1;
-        while group.iter().map(Vec::len).sum::<usize>() < target {
+        while n < target {
             let Some((_, parts)) = slabs.next() else { break };
+            n += count(&parts);
             group.extend(parts);
             end += 1;
         }
-        let n = group.iter().map(Vec::len).sum();
         let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
         let lists = [&mut cells_left, &mut offsets_left, &mut runs_left].map(|rest| take_front(rest, n));
         sorts.push((group, base, span, start, lists));

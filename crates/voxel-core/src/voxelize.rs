@@ -1,7 +1,7 @@
 //! The voxelization pipeline: normalize → fill and shell side by side → combine → colour → (hollow).
 
 use std::sync::OnceLock;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use crate::color_pass::{pastel_all, surface_colors};
@@ -12,7 +12,7 @@ use crate::memory;
 use crate::model::{VoxelModel, VoxelStats};
 use crate::options::{FillMode, ShellMode, VoxelizeOptions};
 use crate::orient::analyse_parts_ahead;
-use crate::progress::{Progress, Stage};
+use crate::progress::{Progress, Settle, Stage};
 use crate::radix;
 use crate::shell::{Shell, shell};
 use crate::soup::TriangleSoup;
@@ -128,15 +128,6 @@ fn voxelize_within_timed(
     let solid = (!options.hollow).then_some(solid);
     progress.enter(Stage::Done)?;
     Ok((VoxelModel::new(spec, stats, parts, solid, visible, colors), times))
-}
-
-/// Sets its flag when dropped: the passes are over, however they ended.
-struct Settle<'a>(&'a AtomicBool);
-
-impl Drop for Settle<'_> {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Relaxed);
-    }
 }
 
 /// The result of `f` and how long it took.

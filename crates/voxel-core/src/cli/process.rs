@@ -3,6 +3,8 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::progress::Settle;
+
 /// Readies the calling process, from its main thread, to voxelize files: the allocator keeps the memory a read frees
 /// ([`keep_freed_memory`]) and the calling thread joins the thread pool ([`join_pool`]). For a program's main
 /// thread, which outlives every job, before its first file.
@@ -68,15 +70,6 @@ pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
             }
         }
     });
-    let _done = Done(done);
+    let _settle = Settle(&done);
     work()
-}
-
-/// Sets its flag when dropped: the work is over, however it ended.
-struct Done(Arc<AtomicBool>);
-
-impl Drop for Done {
-    fn drop(&mut self) {
-        self.0.store(true, Ordering::Relaxed);
-    }
 }

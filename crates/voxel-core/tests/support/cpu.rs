@@ -1,11 +1,28 @@
-//! CPU time of this process, for benchmarks on a shared machine (included with `#[path]`).
+//! CPU time and page faults of this process, for benchmarks on a shared machine and tests of the command line's
+//! process set-up (included with `#[path]`).
+#![allow(dead_code)] // each including target uses its own subset
 
 /// Nanoseconds this process's threads have run on a CPU (Linux, from /proc/self/task/*/schedstat), `None`
 /// elsewhere. A machine shared with other builds inflates it far less than wall time.
 pub fn cpu_ns() -> Option<u64> {
     let tasks = std::fs::read_dir("/proc/self/task").ok()?;
-    let on_cpu = |task: std::fs::DirEntry| -> Option<u64> {
-        std::fs::read_to_string(task.path().join("schedstat")).ok()?.split_whitespace().next()?.parse().ok()
-    };
-    Some(tasks.flatten().filter_map(on_cpu).sum())
+    Some(tasks.flatten().filter_map(|task| task_cpu_ns(&task.file_name().to_string_lossy())).sum())
+}
+
+/// Nanoseconds thread `tid` of this process has run on a CPU (Linux: the first field of its schedstat).
+pub fn task_cpu_ns(tid: &str) -> Option<u64> {
+    std::fs::read_to_string(format!("/proc/self/task/{tid}/schedstat")).ok()?.split_whitespace().next()?.parse().ok()
+}
+
+/// The calling thread's id in this process (Linux: the first field of /proc/thread-self/stat).
+pub fn thread_id() -> Option<String> {
+    Some(std::fs::read_to_string("/proc/thread-self/stat").ok()?.split_whitespace().next()?.to_string())
+}
+
+/// Minor page faults of this process so far (Linux: field 10 of /proc/self/stat; 0 elsewhere).
+pub fn minor_faults() -> u64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // The fields after the command name, which is in parentheses and may hold spaces: minflt is the eighth.
+    let fields = stat.rfind(')').map_or("", |end| &stat[end + 1..]);
+    fields.split_whitespace().nth(7).and_then(|f| f.parse().ok()).unwrap_or(0)
 }
