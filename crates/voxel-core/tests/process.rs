@@ -1,6 +1,6 @@
 //! The command line's process set-up, in a process of its own: after `cli::prepare_process`, memory that was freed is
-//! handed out again without a page fault; within `cli::with_workers_awake`, the pool's other workers spin, and they
-//! stop when it returns.
+//! handed out again without a page fault; within `cli::with_workers_awake`, the pool's other workers spin, off the
+//! caller's core, and they stop when it returns, free to run anywhere again.
 #![cfg(all(feature = "cli", target_os = "linux", target_env = "gnu"))]
 
 #[path = "support/cpu.rs"]
@@ -52,4 +52,31 @@ fn the_other_workers_spin_while_the_work_runs_and_stop_when_it_returns() {
     // Of 300 ms, the awake worker runs most while the work runs, then next to none.
     assert!(during >= 100, "{during} ms of CPU while the work ran");
     assert!(after <= 30, "{after} ms of CPU after it returned");
+}
+
+#[test]
+fn the_other_workers_keep_off_the_callers_core_while_the_work_runs() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("a pool");
+    let tids: Vec<String> = pool.broadcast(|_| cpu::thread_id().expect("a thread id"));
+    let (caller, allowed_during, before, after) = pool.install(|| {
+        let caller = cpu::thread_id().expect("a thread id");
+        let other = tids.iter().find(|&tid| *tid != caller).expect("another worker").clone();
+        let allowed = || cpu::allowed_cores(&other).expect("a thread's cores");
+        let before = allowed();
+        let during = voxel_core::cli::with_workers_awake(|| {
+            // The other worker moves when it takes up its spin.
+            std::thread::sleep(std::time::Duration::from_millis(200));
+            allowed()
+        });
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        (caller, during, before, allowed())
+    });
+    assert_eq!(after, before, "the other worker's cores once the work returned");
+    if before.len() < 2 {
+        assert_eq!(allowed_during, before, "one core: nowhere to move");
+        return;
+    }
+    // One core fewer: the one the caller ran on when the work started.
+    assert_eq!(allowed_during.len(), before.len() - 1, "{allowed_during:?} of {before:?} (caller {caller})");
+    assert!(allowed_during.iter().all(|core| before.contains(core)), "{allowed_during:?} of {before:?}");
 }

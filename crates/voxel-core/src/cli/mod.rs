@@ -174,7 +174,7 @@ pub(crate) fn process(
     let soup = crate::import::load_file(file)?;
     let load_ms = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
-    let mut model = with_workers_awake(|| voxelize(&soup, options))?;
+    let mut model = voxelize(&soup, options)?;
     colors.apply(&mut model)?;
     let voxelize_ms = t1.elapsed().as_secs_f64() * 1e3;
     let t2 = Instant::now();
@@ -264,29 +264,36 @@ pub fn execute(args: &VoxelizeArgs) -> i32 {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let mut failed = false;
     let stdout = std::io::stdout();
-    for file in &files {
-        progress.set_message(file.display().to_string());
-        let outcome =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(file, args, &options, &colors, several)));
-        match outcome {
-            Ok(Ok(line)) => {
-                progress.suspend(|| {
-                    let _ = writeln!(stdout.lock(), "{line}");
-                });
+    // The pool's other workers are kept awake from before the first read to the end of the last file: a worker woken
+    // when a voxelization starts may take milliseconds to join it where the hypervisor has parked its idle core.
+    let failed = with_workers_awake(|| {
+        let mut failed = false;
+        for file in &files {
+            progress.set_message(file.display().to_string());
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                process(file, args, &options, &colors, several)
+            }));
+            match outcome {
+                Ok(Ok(line)) => {
+                    progress.suspend(|| {
+                        let _ = writeln!(stdout.lock(), "{line}");
+                    });
+                }
+                Ok(Err(e)) => {
+                    failed = true;
+                    progress.suspend(|| eprintln!("error: {}: {e}", file.display()));
+                }
+                Err(_) => {
+                    failed = true;
+                    progress
+                        .suspend(|| eprintln!("error: {}: internal error (panic); please report it", file.display()));
+                }
             }
-            Ok(Err(e)) => {
-                failed = true;
-                progress.suspend(|| eprintln!("error: {}: {e}", file.display()));
-            }
-            Err(_) => {
-                failed = true;
-                progress.suspend(|| eprintln!("error: {}: internal error (panic); please report it", file.display()));
-            }
+            progress.inc(1);
         }
-        progress.inc(1);
-    }
+        failed
+    });
     progress.finish_and_clear();
     i32::from(failed)
 }

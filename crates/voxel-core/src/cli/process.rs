@@ -50,20 +50,23 @@ fn keep_freed_memory() {
     }
 }
 
-/// Runs `work` with the current thread pool's other workers kept awake until it returns: each spins, running any job
-/// it finds and otherwise yielding its core (to any thread that shares it). An idle rayon worker goes to sleep after a
-/// few dozen rounds, and waking it again costs each parallel step that follows a serial one 30–45 µs on a 2-core VM
-/// (more where the hypervisor has parked the idle core), during which the caller works alone: a small model's
-/// voxelization takes a dozen such steps in 2–5 ms. For a command line's main thread, whose pool has nothing else
-/// to do meanwhile (OpenMP runtimes spin the same way by default).
+/// Runs `work` with the current thread pool's other workers kept awake until it returns: each spins on a core other
+/// than the caller's, running any job it finds and otherwise yielding its core (to any thread that shares it). An idle
+/// rayon worker goes to sleep after a few dozen rounds, and waking it again costs each parallel step that follows a
+/// serial one 30–45 µs on a 2-core VM, during which the caller works alone: a small model's voxelization takes a
+/// dozen such steps in 2–5 ms. A worker woken on the caller's core, or on a core the hypervisor has parked, may not
+/// run at all for milliseconds ([`off_core`]). For a command line's main thread, whose pool has nothing else to do
+/// meanwhile (OpenMP runtimes spin the same way by default, and bind threads to cores on request).
 pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
     let done = Arc::new(AtomicBool::new(false));
     let caller = rayon::current_thread_index();
+    let core = current_core();
     let flag = done.clone();
     rayon::spawn_broadcast(move |context| {
         if Some(context.index()) == caller {
             return;
         }
+        let _moved = core.and_then(off_core);
         while !flag.load(Ordering::Relaxed) {
             if rayon::yield_now() != Some(rayon::Yield::Executed) {
                 std::thread::yield_now();
@@ -72,4 +75,64 @@ pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
     });
     let _settle = Settle(&done);
     work()
+}
+
+/// The core the calling thread runs on (where the system says: Linux with glibc).
+fn current_core() -> Option<usize> {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // SAFETY: `sched_getcpu` reads the calling thread's current CPU; it takes no arguments and touches no memory.
+        #[allow(unsafe_code)]
+        let core = unsafe { libc::sched_getcpu() };
+        usize::try_from(core).ok()
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    None
+}
+
+/// Moves the calling thread off `core` until the returned guard drops, when it may run anywhere it could before
+/// (Linux with glibc; `None` where it cannot move: no other core allowed, or the system refuses). A worker woken by a thread that
+/// runs on one core of a 2-core VM was mostly placed on that same core, beside the caller, which it shares until the
+/// scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the Fox at
+/// R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
+fn off_core(core: usize) -> Option<Allowed> {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        let size = std::mem::size_of::<libc::cpu_set_t>();
+        // SAFETY: a zeroed `cpu_set_t` is an empty set; `sched_getaffinity` writes at most `size` bytes into it, and
+        // `CPU_ISSET`, `CPU_CLR` and `CPU_COUNT` read or write within it (`CPU_CLR` ignores a core past its end).
+        #[allow(unsafe_code)]
+        let (before, others) = unsafe {
+            let mut before: libc::cpu_set_t = std::mem::zeroed();
+            if libc::sched_getaffinity(0, size, &mut before) != 0 || !libc::CPU_ISSET(core, &before) {
+                return None;
+            }
+            let mut others = before;
+            libc::CPU_CLR(core, &mut others);
+            (before, others)
+        };
+        // SAFETY: `sched_setaffinity` reads `size` bytes of the set, which holds that many.
+        #[allow(unsafe_code)]
+        let moved = unsafe { libc::CPU_COUNT(&others) > 0 && libc::sched_setaffinity(0, size, &others) == 0 };
+        moved.then_some(Allowed(before))
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    {
+        let _ = core;
+        None
+    }
+}
+
+/// The cores a thread was allowed before [`off_core`]: allowed again when this drops.
+struct Allowed(#[cfg(all(target_os = "linux", target_env = "gnu"))] libc::cpu_set_t);
+
+impl Drop for Allowed {
+    fn drop(&mut self) {
+        #[cfg(all(target_os = "linux", target_env = "gnu"))]
+        // SAFETY: as in `off_core`: the set holds `size_of::<cpu_set_t>()` bytes, which `sched_setaffinity` reads.
+        #[allow(unsafe_code)]
+        unsafe {
+            libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &self.0);
+        }
+    }
 }

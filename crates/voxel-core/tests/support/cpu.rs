@@ -26,3 +26,15 @@ pub fn minor_faults() -> u64 {
     let fields = stat.rfind(')').map_or("", |end| &stat[end + 1..]);
     fields.split_whitespace().nth(7).and_then(|f| f.parse().ok()).unwrap_or(0)
 }
+
+/// The cores thread `tid` of this process may run on (Linux: `Cpus_allowed_list` of its status, expanded).
+pub fn allowed_cores(tid: &str) -> Option<Vec<usize>> {
+    let status = std::fs::read_to_string(format!("/proc/self/task/{tid}/status")).ok()?;
+    let list = status.lines().find_map(|line| line.strip_prefix("Cpus_allowed_list:"))?.trim();
+    let mut cores = Vec::new();
+    for range in list.split(',') {
+        let (first, last) = range.split_once('-').unwrap_or((range, range));
+        cores.extend(first.parse::<usize>().ok()?..=last.parse().ok()?);
+    }
+    Some(cores)
+}
