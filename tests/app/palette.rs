@@ -209,7 +209,7 @@ fn exporting_an_animated_model_also_writes_its_clip_as_one_animated_glb() {
     for k in [0, frames / 2, frames - 1] {
         back.pose_into(0, k as f32 / 30.0 + 1e-3, &mut soup).unwrap();
         let shown: HashSet<[u8; 3]> =
-            soup.colors().iter().map(|color| [0, 1, 2].map(|c| voxel_core::color::linear_to_srgb(color[c]))).collect();
+            soup.colors().iter().map(|color| [0, 1, 2].map(|c| voxel_core::srgb::linear_to_srgb(color[c]))).collect();
         assert!(!shown.is_empty() && shown.is_subset(&pico8), "frame {k}: {shown:?}");
     }
     std::fs::remove_dir_all(&out).unwrap();

@@ -10,7 +10,7 @@ use voxel_core::shapes::{IndexedMesh, cuboid, cylinder, dome, torus, uv_sphere};
 
 /// Linear RGB from sRGB hex, opaque.
 fn rgb(hex: u32) -> [f32; 4] {
-    let c = |shift: u32| voxel_core::color::srgb_to_linear(((hex >> shift) & 0xff) as u8);
+    let c = |shift: u32| voxel_core::srgb::srgb_to_linear(((hex >> shift) & 0xff) as u8);
     [c(16), c(8), c(0), 1.0]
 }
 

@@ -1,100 +1,8 @@
-//! Colour: sampling a material at a point of a triangle, sRGB ↔ linear, and the article's pastel remap.
-
-use std::sync::LazyLock;
+//! Colour: sampling a material at a point of a triangle (sRGB ↔ linear: [`crate::srgb`]), and the article's pastel
+//! remap.
 
 use crate::soup::TriangleSoup;
-
-/// sRGB-encoded 8-bit component → linear.
-pub fn srgb_to_linear(c: u8) -> f32 {
-    static TABLE: LazyLock<[f32; 256]> = LazyLock::new(|| {
-        std::array::from_fn(|c| {
-            let c = c as f32 / 255.0;
-            if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-        })
-    });
-    TABLE[usize::from(c)]
-}
-
-/// Linear component → sRGB-encoded 8-bit: exactly `linear_to_srgb_formula` (the sRGB curve in f32 with
-/// `powf`, rounded), looked up instead of computed. The formula is non-decreasing in `c`, so its value is the
-/// number of the 255 thresholds `t₁ ≤ … ≤ t₂₅₅` (tₖ: the smallest f32 it maps to k or more) that are ≤ `c`.
-/// The f32s from 2⁻¹³ to 1 fall into 1,664 slices by the top 16 bits of their encoding (the exponent and 7
-/// bits of the mantissa: each slice spans 1/128 of its start); a table gives the count at the start of `c`'s
-/// slice, and the one threshold that may lie inside the slice (the curve rises by less than one step across a
-/// slice: checked by the tests) is compared without a branch (one taken or not at random, where colours vary from
-/// cell to cell, cost a misprediction a channel). Below 2⁻¹³ the formula gives 0.
-pub fn linear_to_srgb(c: f32) -> u8 {
-    static TABLES: LazyLock<SrgbThresholds> = LazyLock::new(SrgbThresholds::new);
-    let bits = c.to_bits();
-    // From 1 up, negative values and NaN (sign bit set, or above +∞'s encoding): the formula's clamp and
-    // saturating cast give 255 and 0.
-    if bits >= 1f32.to_bits() {
-        return if c >= 1.0 { 255 } else { 0 };
-    }
-    let Some(slice) = (bits >> SRGB_SLICE_SHIFT).checked_sub(SRGB_FIRST_SLICE) else {
-        return 0; // below 2⁻¹³ (zero included), under the first threshold (checked by the tests)
-    };
-    let tables = &*TABLES;
-    let k = tables.at_slice[slice as usize];
-    k + u8::from(c >= tables.thresholds[usize::from(k) + 1])
-}
-
-/// The low bits of an f32's encoding that a slice of [`linear_to_srgb`]'s table spans.
-const SRGB_SLICE_SHIFT: u32 = 16;
-
-/// The first slice: the one starting at 2⁻¹³.
-const SRGB_FIRST_SLICE: u32 = (127 - 13) << (23 - SRGB_SLICE_SHIFT);
-
-/// Slices from 2⁻¹³ up to 1.
-const SRGB_SLICES: usize = (1f32.to_bits() >> SRGB_SLICE_SHIFT) as usize - SRGB_FIRST_SLICE as usize;
-
-/// The tables of [`linear_to_srgb`].
-struct SrgbThresholds {
-    /// `thresholds[k]`, 1 ≤ k ≤ 255: the smallest f32 that the formula maps to k or more (`thresholds[0]` = 0,
-    /// `thresholds[256]` = ∞: none is reached from 255).
-    thresholds: [f32; 257],
-    /// The number of thresholds at or below the start of each slice (the formula's value there).
-    at_slice: [u8; SRGB_SLICES],
-}
-
-impl SrgbThresholds {
-    fn new() -> Self {
-        let mut thresholds = [0.0f32; 257];
-        thresholds[256] = f32::INFINITY;
-        for (k, threshold) in thresholds.iter_mut().enumerate().take(256).skip(1) {
-            // Start at the curve's exact inverse at k − ½ and step one f32 at a time to the first value that
-            // the formula maps to k or more (a few steps: the inverse is within rounding of it).
-            let s = (k as f64 - 0.5) / 255.0;
-            let guess = if s <= 0.04045 { s / 12.92 } else { ((s + 0.055) / 1.055).powf(2.4) };
-            let mut t = guess as f32;
-            while t > 0.0 && linear_to_srgb_formula(f32::from_bits(t.to_bits() - 1)) >= k as u8 {
-                t = f32::from_bits(t.to_bits() - 1);
-            }
-            while linear_to_srgb_formula(t) < k as u8 {
-                t = f32::from_bits(t.to_bits() + 1);
-            }
-            *threshold = t;
-        }
-        // The count of thresholds at or below each slice's start (the thresholds ascend).
-        let mut count = 0u8;
-        let at_slice = std::array::from_fn(|s| {
-            let start = f32::from_bits((s as u32 + SRGB_FIRST_SLICE) << SRGB_SLICE_SHIFT);
-            while count < 255 && thresholds[usize::from(count) + 1] <= start {
-                count += 1;
-            }
-            count
-        });
-        Self { thresholds, at_slice }
-    }
-}
-
-/// Linear component → sRGB-encoded 8-bit by the sRGB curve (`powf`): the definition [`linear_to_srgb`]
-/// tabulates.
-fn linear_to_srgb_formula(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0).round() as u8
-}
+use crate::srgb::{linear_to_srgb, srgb_to_linear};
 
 /// `x.round() as u8` for `x` in [0, 255] or NaN (half away from zero; NaN gives 0), without a libm call:
 /// `x − ⌊x⌋` is exact for these values.
@@ -223,54 +131,6 @@ pub fn pastel(rgba: [u8; 4]) -> [u8; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_round_trips() {
-        for c in [0u8, 1, 10, 100, 187, 255] {
-            assert_eq!(linear_to_srgb(srgb_to_linear(c)), c);
-        }
-    }
-
-    /// Whether the table gives the formula's value at `c`.
-    fn table_matches(c: f32) -> bool {
-        linear_to_srgb(c) == linear_to_srgb_formula(c)
-    }
-
-    #[test]
-    fn the_srgb_table_is_the_formula_at_every_step_and_between() {
-        let tables = SrgbThresholds::new();
-        for k in 1..256 {
-            let t = tables.thresholds[k];
-            assert_eq!(usize::from(linear_to_srgb(t)), k, "at threshold {k}: {t}");
-            let below = f32::from_bits(t.to_bits() - 1);
-            assert_eq!(usize::from(linear_to_srgb_formula(below)), k - 1, "below threshold {k}");
-            for c in [t, below, f32::from_bits(t.to_bits() + 1), f32::from_bits(t.to_bits() - 2)] {
-                assert!(table_matches(c), "{c}");
-            }
-        }
-        let specials = [f32::NAN, -f32::NAN, -1.0, -0.0, 0.0, 1e-45, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY];
-        assert!(specials.into_iter().all(table_matches));
-        // Every slice's start and end, and a million evenly spaced values; below the first slice, 0.
-        assert_eq!(f32::from_bits(SRGB_FIRST_SLICE << SRGB_SLICE_SHIFT), 2f32.powi(-13));
-        assert!(tables.thresholds[1] > 2f32.powi(-13), "{}", tables.thresholds[1]);
-        let start = |s: usize| f32::from_bits((s as u32 + SRGB_FIRST_SLICE) << SRGB_SLICE_SHIFT);
-        assert_eq!(start(SRGB_SLICES), 1.0);
-        // At most one threshold inside a slice: the one comparison `linear_to_srgb` makes.
-        let counts: Vec<u8> = (0..=SRGB_SLICES).map(|s| linear_to_srgb_formula(start(s))).collect();
-        assert!(counts.windows(2).all(|w| w[1] - w[0] <= 1), "{counts:?}");
-        assert!(
-            (0..=SRGB_SLICES).all(|s| table_matches(start(s)) && table_matches(f32::from_bits(start(s).to_bits() - 1)))
-        );
-        assert!((0..=1_000_000).all(|i| table_matches(i as f32 / 1e6)));
-    }
-
-    /// Every f32, NaNs included (2³² values): `cargo test -p voxel-core --release -- --ignored`.
-    #[test]
-    #[ignore = "exhaustive, about a minute in release"]
-    fn the_srgb_table_is_the_formula_for_every_f32() {
-        let mismatch = (0..=u32::MAX).map(f32::from_bits).find(|&c| !table_matches(c));
-        assert_eq!(mismatch.map(f32::to_bits), None);
-    }
 
     #[test]
     fn rounding_without_libm_matches_round() {

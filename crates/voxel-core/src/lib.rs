@@ -72,6 +72,7 @@ mod radix;
 pub mod shapes;
 mod shell;
 pub mod soup;
+pub mod srgb;
 mod visible;
 pub mod vox;
 pub mod voxelize;

@@ -52,9 +52,9 @@ mod tests {
     use clap::Parser;
 
     use crate::cli::{VoxelizeArgs, process};
-    use crate::color::linear_to_srgb;
     use crate::shapes::cuboid;
     use crate::soup::TriangleSoup;
+    use crate::srgb::linear_to_srgb;
 
     /// A scratch folder for one test.
     fn scratch(name: &str) -> PathBuf {

@@ -335,8 +335,8 @@ fn uri_escape(name: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::color::srgb_to_linear;
     use crate::export::mesh::tests::model_of;
+    use crate::srgb::srgb_to_linear;
 
     /// The bottom layer of [`model_of`]`(k)`'s grid, 8k × 8k cells, in a checkerboard of two colours (nothing
     /// merges on its faces).

@@ -6,8 +6,8 @@
 //! direction by (plane, row, column), cut into runs of one colour along each row, and a run extends the
 //! rectangle of the row before when it spans the same columns in the same colour.
 
-use crate::color::srgb_to_linear;
 use crate::model::VoxelModel;
+use crate::srgb::srgb_to_linear;
 
 /// One rectangle of the surface, all of one colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Oklab (Björn Ottosson's perceptual colour space): distances there follow how different colours look, so
 //! palette matching and colour reduction work in it.
 
-use crate::color::srgb_to_linear;
+use crate::srgb::srgb_to_linear;
 
 /// An Oklab colour: lightness L and the two opponent axes a, b.
 pub(super) type Lab = [f32; 3];
