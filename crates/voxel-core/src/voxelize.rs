@@ -187,7 +187,15 @@ fn distinct_sorted(colors: &[([u8; 4], u32)]) -> Vec<u32> {
     // Most models show a few colours (their materials, a palette of vertex colours, a texture's): a small set
     // collects them; past `SMALL_SET` of them, the values are sorted.
     let mut seen = rustc_hash::FxHashSet::default();
+    // The colours seen last, in slots picked by a multiplicative hash of the colour: most repeats are found there
+    // before the set is asked (a textured model's cells repeat a few hundred colours in no order).
+    let mut recent = [u32::MAX; RECENT];
     for v in values() {
+        let slot = &mut recent[(v.wrapping_mul(0x9E37_79B9) >> (u32::BITS - RECENT.trailing_zeros())) as usize];
+        if *slot == v {
+            continue;
+        }
+        *slot = v;
         if seen.insert(v) && seen.len() > SMALL_SET {
             let mut values = radix::sort_by_key(values().collect(), u32::BITS, |&v| v);
             values.dedup();
@@ -214,6 +222,10 @@ fn union_count(a: &[u32], b: &[u32]) -> usize {
 /// The most distinct values [`distinct_sorted`] collects in a set (a textured model shows a few thousand: CesiumMan at
 /// R=128 1,488, whose count took 0.14 ms when the set stopped at 2¹⁰ and the values were sorted, 0.10 ms in the set).
 const SMALL_SET: usize = 1 << 13;
+
+/// The slots of [`distinct_sorted`]'s recent colours (a power of two). (The milk truck at R=128, 46,129 colours of 132
+/// kinds from a texture: counted in 0.12 ms rather than 0.15, warm.)
+const RECENT: usize = 256;
 
 /// Above this many colours, [`distinct`] sorts the halves of the list side by side. (Below it a split measured no
 /// faster: the box of vertex colours at R=128, 96,776 colours, whose halves' lists are fresh pages in a fresh
