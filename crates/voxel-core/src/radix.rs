@@ -65,7 +65,7 @@ pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32
         return sorted;
     }
     // The last pass writes to the spare list: no third list.
-    let (items, mut sorted) = leading_passes(parts, &digits, &key);
+    let (items, mut sorted) = leading_passes(parts, &digits, &key, Vec::new());
     // Every position below `len` is written by the pass: only the length needs setting.
     sorted.resize(len, T::default());
     counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), |at, item| sorted[at] = item);
@@ -74,19 +74,21 @@ pub(crate) fn sort_parts_by_key<T: Copy + Default>(parts: Vec<Vec<T>>, bits: u32
 
 /// [`sort_parts_by_key`] without the sorted list: its last pass hands each item to `place` with its position in
 /// the sorted order (in no particular order of positions), for a caller that splits the items into lists of
-/// their fields.
+/// their fields. A sort of several passes writes its first into `scratch` (whatever it holds), which a caller on
+/// another thread can allocate where memory is at hand (a thread's first allocations touch fresh pages).
 pub(crate) fn sort_parts_into<T: Copy + Default>(
     parts: Vec<Vec<T>>,
     bits: u32,
     key: impl Fn(&T) -> u32,
     place: impl FnMut(usize, T),
+    scratch: Vec<T>,
 ) {
     let digits = Digits::new(parts.iter().map(Vec::len).sum::<usize>() * size_of::<T>(), bits);
     let last = digits.passes - 1;
     if last == 0 {
         return counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), place);
     }
-    let (items, spare) = leading_passes(parts, &digits, &key);
+    let (items, spare) = leading_passes(parts, &digits, &key, scratch);
     drop(spare);
     counting_pass(items.iter(), digits.width, |item| digits.of(key(item), last), place);
 }
@@ -114,15 +116,18 @@ impl Digits {
     }
 }
 
-/// Every pass of a sort in several but the last: the items in that order, and a spare list for the last pass
-/// (the largest part's memory, or the first pass's when a third pass reused that).
+/// Every pass of a sort in several but the last, the first into `items` (whatever it holds): the items in that
+/// order, and a spare list for the last pass (the largest part's memory, or the first pass's when a third pass
+/// reused that).
 fn leading_passes<T: Copy + Default>(
     parts: Vec<Vec<T>>,
     digits: &Digits,
     key: &impl Fn(&T) -> u32,
+    mut items: Vec<T>,
 ) -> (Vec<T>, Vec<T>) {
     let len = parts.iter().map(Vec::len).sum();
-    let mut items = vec![T::default(); len];
+    items.clear();
+    items.resize(len, T::default());
     counting_pass(parts.iter().flatten(), digits.width, |item| digits.of(key(item), 0), |at, item| items[at] = item);
     let mut spare = parts.into_iter().max_by_key(Vec::capacity).unwrap_or_default();
     for pass in 1..digits.passes - 1 {
