@@ -50,8 +50,8 @@ fn keep_freed_memory() {
     }
 }
 
-/// Runs `work` with the current thread pool's other workers kept awake until it returns: each spins on a core other
-/// than the caller's, running any job it finds and otherwise yielding its core (to any thread that shares it). An idle
+/// Runs `work` with the current thread pool's other workers kept awake until it returns: each spins (on a core other
+/// than the caller's, when the caller is a worker too, as a command line's main thread is), running any job it finds and otherwise yielding its core (to any thread that shares it). An idle
 /// rayon worker goes to sleep after a few dozen rounds, and waking it again costs each parallel step that follows a
 /// serial one 30–45 µs on a 2-core VM, during which the caller works alone: a small model's voxelization takes a
 /// dozen such steps in 2–5 ms. A worker woken on the caller's core, or on a core the hypervisor has parked, may not
@@ -60,7 +60,8 @@ fn keep_freed_memory() {
 pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
     let done = Arc::new(AtomicBool::new(false));
     let caller = rayon::current_thread_index();
-    let core = current_core();
+    // A caller outside the pool waits for the pool's work: only a worker's core is kept for it.
+    let core = caller.and(current_core());
     let flag = done.clone();
     rayon::spawn_broadcast(move |context| {
         if Some(context.index()) == caller {
