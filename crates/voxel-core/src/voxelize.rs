@@ -189,13 +189,12 @@ fn distinct_sorted(colors: &[([u8; 4], u32)]) -> Vec<u32> {
     let mut seen = rustc_hash::FxHashSet::default();
     // The colours seen last, in slots picked by a multiplicative hash of the colour: most repeats are found there
     // before the set is asked (a textured model's cells repeat a few hundred colours in no order).
-    let mut recent = [u32::MAX; RECENT];
+    let mut recent = [None; RECENT];
     for v in values() {
         let slot = &mut recent[(v.wrapping_mul(0x9E37_79B9) >> (u32::BITS - RECENT.trailing_zeros())) as usize];
-        if *slot == v {
+        if slot.replace(v) == Some(v) {
             continue;
         }
-        *slot = v;
         if seen.insert(v) && seen.len() > SMALL_SET {
             let mut values = radix::sort_by_key(values().collect(), u32::BITS, |&v| v);
             values.dedup();
@@ -324,6 +323,9 @@ mod tests {
                 assert!(len == 1_000 || (count > SMALL_SET) == (kinds > SMALL_SET), "{count} of {kinds} kinds");
             }
         }
+        // Opaque white is the largest value (every byte 255), and black the smallest.
+        assert_eq!(check(vec![u32::MAX; 5], "white"), 1);
+        assert_eq!(check(vec![3, u32::MAX, 0, u32::MAX, 3], "white, black and another"), 3);
         let halves = (0..long).map(|k| if k < long / 2 { 7 } else { k.wrapping_mul(2_654_435_761) % 50_000 });
         assert!(check(halves.collect(), "one colour, then many") > SMALL_SET);
         assert_eq!(distinct(&[]), 0);

@@ -51,12 +51,13 @@ fn keep_freed_memory() {
 }
 
 /// Runs `work` with the current thread pool's other workers kept awake until it returns: each spins (on a core other
-/// than the caller's, when the caller is a worker too, as a command line's main thread is), running any job it finds and otherwise yielding its core (to any thread that shares it). An idle
-/// rayon worker goes to sleep after a few dozen rounds, and waking it again costs each parallel step that follows a
-/// serial one 30–45 µs on a 2-core VM, during which the caller works alone: a small model's voxelization takes a
-/// dozen such steps in 2–5 ms. A worker woken on the caller's core, or on a core the hypervisor has parked, may not
-/// run at all for milliseconds ([`off_core`]). For a command line's main thread, whose pool has nothing else to do
-/// meanwhile (OpenMP runtimes spin the same way by default, and bind threads to cores on request).
+/// than the caller's, when the caller is a worker too, as a command line's main thread is), running any job it finds
+/// and otherwise yielding its core (to any thread that shares it). An idle rayon worker goes to sleep after a few
+/// dozen rounds, and waking it again costs each parallel step that follows a serial one 30–45 µs on a 2-core VM,
+/// during which the caller works alone: a small model's voxelization takes a dozen such steps in 2–5 ms. A worker
+/// woken on the caller's core, or on a core the hypervisor has parked, may not run at all for milliseconds
+/// ([`off_core`]). For a command line's main thread, whose pool has nothing else to do meanwhile (OpenMP runtimes spin
+/// the same way by default, and bind threads to cores on request).
 pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
     let done = Arc::new(AtomicBool::new(false));
     let caller = rayon::current_thread_index();
@@ -92,10 +93,10 @@ fn current_core() -> Option<usize> {
 }
 
 /// Moves the calling thread off `core` until the returned guard drops, when it may run anywhere it could before
-/// (Linux with glibc; `None` where it cannot move: no other core allowed, or the system refuses). A worker woken by a thread that
-/// runs on one core of a 2-core VM was mostly placed on that same core, beside the caller, which it shares until the
-/// scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the Fox at
-/// R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
+/// (Linux with glibc; `None` where it cannot move: no other core allowed, or the system refuses). A worker woken by a
+/// thread that runs on one core of a 2-core VM was mostly placed on that same core, beside the caller, which it shares
+/// until the scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the
+/// Fox at R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
 fn off_core(core: usize) -> Option<Allowed> {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
