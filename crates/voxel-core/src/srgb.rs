@@ -36,7 +36,7 @@ const LINEAR_BITS: [u32; 256] = [
     0x3f7933b9, 0x3f7b74c6, 0x3f7db8e0, 0x3f800000,
 ];
 
-/// [`SrgbThresholds::thresholds`] as f32 bits: k from 0 to 256.
+/// [`Thresholds::thresholds`] as f32 bits: k from 0 to 256.
 const THRESHOLD_BITS: [u32; 257] = [
     0x00000000, 0x391f22b4, 0x39eeb40e, 0x3a46eb61, 0x3a8b3e5d, 0x3ab3070b, 0x3adacfb7, 0x3b014c32, 0x3b153089,
     0x3b2914df, 0x3b3cf936, 0x3b50f2d1, 0x3b65fb9a, 0x3b7c3404, 0x3b89d060, 0x3b962333, 0x3ba314be, 0x3bb0a731,
@@ -119,7 +119,7 @@ const FIRST_SLICE: u32 = (127 - 13) << (23 - SLICE_SHIFT);
 /// Slices from 2⁻¹³ up to 1.
 const SLICES: usize = (1f32.to_bits() >> SLICE_SHIFT) as usize - FIRST_SLICE as usize;
 
-/// The tables of [`linear_to_srgb`].
+/// [`linear_to_srgb`]'s tables, built from the written-out thresholds when the crate is compiled.
 static THRESHOLDS: Thresholds = Thresholds::new(from_bits(THRESHOLD_BITS));
 
 /// The tables of [`linear_to_srgb`].
