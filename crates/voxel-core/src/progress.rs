@@ -91,7 +91,7 @@ impl Progress {
 }
 
 /// Sets its flag when dropped: the work it guards is over, however it ended (the pipeline's passes, whose part
-/// analysis started beside them then stops; the command line's voxelization, whose awake workers then sleep).
+/// analysis started beside them then stops; the command line's files, whose awake workers then sleep).
 pub(crate) struct Settle<'a>(pub(crate) &'a AtomicBool);
 
 impl Drop for Settle<'_> {

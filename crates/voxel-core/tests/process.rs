@@ -31,10 +31,16 @@ fn a_block_freed_before_is_reused_without_page_faults() {
     assert!(second < pages / 16, "the second touch of {pages} pages took {second} faults (the first {first})");
 }
 
+/// A pool of two workers, and their thread ids.
+fn pool_of_two() -> (rayon::ThreadPool, Vec<String>) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("a pool");
+    let tids = pool.broadcast(|_| cpu::thread_id().expect("a thread id"));
+    (pool, tids)
+}
+
 #[test]
 fn the_other_workers_spin_while_the_work_runs_and_stop_when_it_returns() {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("a pool");
-    let tids: Vec<String> = pool.broadcast(|_| cpu::thread_id().expect("a thread id"));
+    let (pool, tids) = pool_of_two();
     let cpu = || tids.iter().map(|tid| cpu::task_cpu_ns(tid).expect("a thread's CPU time")).sum::<u64>() / 1_000_000;
     let pause = std::time::Duration::from_millis(300);
     let (during, after) = pool.install(|| {
@@ -56,8 +62,7 @@ fn the_other_workers_spin_while_the_work_runs_and_stop_when_it_returns() {
 
 #[test]
 fn the_other_workers_keep_off_the_callers_core_while_the_work_runs() {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("a pool");
-    let tids: Vec<String> = pool.broadcast(|_| cpu::thread_id().expect("a thread id"));
+    let (pool, tids) = pool_of_two();
     let (caller, allowed_during, before, after) = pool.install(|| {
         let caller = cpu::thread_id().expect("a thread id");
         let other = tids.iter().find(|&tid| *tid != caller).expect("another worker").clone();
