@@ -23,18 +23,23 @@ impl<T> Default for Segments<T> {
 
 impl<T> Segments<T> {
     /// Appends `item`.
-    #[inline]
+    #[inline(always)]
     pub fn push(&mut self, item: T) {
         match self.0.last_mut() {
             Some(last) if last.len() < last.capacity() => last.push(item),
-            last => {
-                let bytes =
-                    last.map_or(SEGMENT_BYTES[0], |last| (2 * last.len() * size_of::<T>()).min(SEGMENT_BYTES[1]));
-                let mut segment = Vec::with_capacity(bytes.div_ceil(size_of::<T>()));
-                segment.push(item);
-                self.0.push(segment);
-            }
+            _ => self.grow(item),
         }
+    }
+
+    /// Appends `item` in a new segment (out of line: most pushes find room in the last one).
+    #[cold]
+    #[inline(never)]
+    fn grow(&mut self, item: T) {
+        let bytes =
+            self.0.last().map_or(SEGMENT_BYTES[0], |last| (2 * last.len() * size_of::<T>()).min(SEGMENT_BYTES[1]));
+        let mut segment = Vec::with_capacity(bytes.div_ceil(size_of::<T>()));
+        segment.push(item);
+        self.0.push(segment);
     }
 
     /// The segments of every list of `lists`, in order.

@@ -60,7 +60,9 @@ pub(super) struct CellTester {
 }
 
 impl CellTester {
-    /// Prepares triangle `t`, which spans `lo` to `hi`, for columns along axis `d`.
+    /// Prepares triangle `t`, which spans `lo` to `hi`, for columns along axis `d`. (Inlined: built in its caller's
+    /// frame rather than copied there.)
+    #[inline]
     pub fn new(t: &GridTriangle, d: usize, lo: [f64; 3], hi: [f64; 3]) -> Self {
         let (u, v) = ((d + 1) % 3, (d + 2) % 3);
         let normal = triangle_normal(t);
