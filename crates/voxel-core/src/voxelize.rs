@@ -165,9 +165,8 @@ fn prepare<'a>(
     Ok((spec, tris))
 }
 
-/// The number of distinct colours among `colors`. A long list (a model of many colours: vertex colours varying
-/// across every face, at a fine grid) is split in halves whose distinct colours are sorted side by side, then
-/// counted together.
+/// The number of distinct colours among `colors`. A list of more than [`DISTINCT_SPLIT`] is split in halves whose
+/// distinct colours are collected side by side, then counted together.
 fn distinct(colors: &[([u8; 4], u32)]) -> usize {
     if colors.len() <= DISTINCT_SPLIT {
         return distinct_sorted(colors).len();
@@ -226,9 +225,9 @@ const SMALL_SET: usize = 1 << 13;
 /// kinds from a texture: counted in 0.12 ms rather than 0.15, warm.)
 const RECENT: usize = 256;
 
-/// Above this many colours, [`distinct`] counts the halves of the list side by side. (The colour count of a fresh
-/// run at R=128, medians of 15, split from 2¹⁷ colours on → from 2¹²: the milk truck's 46,129 colours 0.134 → 0.087 ms,
-/// the duck's 60,530 0.080 → 0.046, CesiumMan's 14,698 0.142 → 0.127, the Fox's 14,054 0.027 → 0.023.)
+/// Above this many colours, [`distinct`] counts the halves of the list side by side. (Fresh runs at R=128, medians of
+/// 15 of the count alone, split from 2¹⁷ colours and from 2¹²: the milk truck's 46,129 colours 0.134 and 0.087 ms, the
+/// duck's 60,530 0.080 and 0.046, CesiumMan's 14,698 0.142 and 0.127, the Fox's 14,054 0.027 and 0.023.)
 const DISTINCT_SPLIT: usize = 1 << 12;
 
 /// The solid cells from the fill and the shell of `tris`, per the modes.
