@@ -184,7 +184,8 @@ fn distinct_sorted(colors: &[([u8; 4], u32)]) -> Vec<u32> {
         colors.iter().map(|c| u32::from_le_bytes(c.0)).filter(move |&v| last.replace(v) != Some(v))
     };
     // Most models show a few colours (their materials, a palette of vertex colours, a texture's): a small set
-    // collects them; past `SMALL_SET` of them, the values are sorted.
+    // collects them. Past `SMALL_SET` of them, or once the first `FEW_NEW` came among fewer than an eighth more values
+    // (colours that hardly repeat: vertex colours varying across every face), the values are sorted.
     let mut seen = rustc_hash::FxHashSet::default();
     // The colours seen last, in slots picked by a multiplicative hash of the colour: most repeats are found there
     // before the set is asked (a textured model's cells repeat a few hundred colours in no order).
@@ -194,8 +195,6 @@ fn distinct_sorted(colors: &[([u8; 4], u32)]) -> Vec<u32> {
         if slot.replace(v) == Some(v) {
             continue;
         }
-        // Past the set's size, or once its first `FEW_NEW` colours came among fewer than an eighth more values (colours
-        // that hardly repeat: vertex colours varying across every face), the values are sorted.
         if seen.insert(v) && (seen.len() > SMALL_SET || seen.len() == FEW_NEW && count < FEW_NEW + FEW_NEW / 8) {
             let mut all = Vec::with_capacity(colors.len());
             all.extend(values());
