@@ -56,8 +56,9 @@ fn keep_freed_memory() {
 /// dozen rounds, and waking it again costs each parallel step that follows a serial one 30–45 µs on a 2-core VM,
 /// during which the caller works alone: a small model's voxelization takes a dozen such steps in 2–5 ms. A worker
 /// woken on the caller's core, or on a core the hypervisor has parked, may not run at all for milliseconds
-/// ([`off_core`]). For a command line's main thread, whose pool has nothing else to do meanwhile (OpenMP runtimes spin
-/// the same way by default, and bind threads to cores on request).
+/// ([`off_core`]). Meanwhile the caller keeps to its core ([`on_core`]), which the scheduler would otherwise move next to
+/// a spinning worker now and then. For a command line's main thread, whose pool has nothing else to do meanwhile
+/// (OpenMP runtimes spin the same way by default, and bind threads to cores on request).
 pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
     let done = Arc::new(AtomicBool::new(false));
     let caller = rayon::current_thread_index();
@@ -76,6 +77,7 @@ pub fn with_workers_awake<T>(work: impl FnOnce() -> T) -> T {
         }
     });
     let _settle = Settle(&done);
+    let _kept = core.and_then(on_core);
     work()
 }
 
@@ -93,45 +95,64 @@ fn current_core() -> Option<usize> {
 }
 
 /// Moves the calling thread off `core` until the returned guard drops, when it may run anywhere it could before
-/// (Linux with glibc; `None` where it cannot move: no other core allowed, or the system refuses). A worker woken by a
-/// thread that runs on one core of a 2-core VM was mostly placed on that same core, beside the caller, which it shares
-/// until the scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the
-/// Fox at R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
+/// (`None` where it cannot move: no other core allowed, or the system refuses). A worker woken by a thread that runs
+/// on one core of a 2-core VM was mostly placed on that same core, beside the caller, which it shares until the
+/// scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the Fox at
+/// R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
 fn off_core(core: usize) -> Option<Allowed> {
+    restrict(core, false)
+}
+
+/// Keeps the calling thread on `core` until the returned guard drops, when it may run anywhere it could before
+/// (`None` where `core` is not allowed or the system refuses). Left free, a command line's main thread was now and then
+/// moved onto the core where the other worker spins, which it then shared while its own stood idle (fresh runs of
+/// CesiumMan at R=128 as slow as one thread or slower, 6–8 ms, in 3–5 of 41).
+fn on_core(core: usize) -> Option<Allowed> {
+    restrict(core, true)
+}
+
+/// Restricts the calling thread, until the returned guard drops, to `core` alone (`keep`) or to the cores it may run on
+/// but `core` (Linux with glibc; `None` where that leaves no core, `core` is not allowed, or the system refuses).
+fn restrict(core: usize, keep: bool) -> Option<Allowed> {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         let size = std::mem::size_of::<libc::cpu_set_t>();
         // SAFETY: a zeroed `cpu_set_t` is an empty set; `sched_getaffinity` writes at most `size` bytes into it, and
-        // `CPU_ISSET`, `CPU_CLR` and `CPU_COUNT` read or write within it (`CPU_CLR` ignores a core past its end).
+        // `CPU_ISSET`, `CPU_SET` and `CPU_CLR` read or write within it (they ignore a core past its end).
         #[allow(unsafe_code)]
-        let (before, others) = unsafe {
+        let (before, allowed) = unsafe {
             let mut before: libc::cpu_set_t = std::mem::zeroed();
             if libc::sched_getaffinity(0, size, &mut before) != 0 || !libc::CPU_ISSET(core, &before) {
                 return None;
             }
-            let mut others = before;
-            libc::CPU_CLR(core, &mut others);
-            (before, others)
+            let mut allowed = before;
+            if keep {
+                allowed = std::mem::zeroed();
+                libc::CPU_SET(core, &mut allowed);
+            } else {
+                libc::CPU_CLR(core, &mut allowed);
+            }
+            (before, allowed)
         };
-        // SAFETY: `sched_setaffinity` reads `size` bytes of the set, which holds that many.
+        // SAFETY: `CPU_COUNT` reads the set; `sched_setaffinity` reads `size` bytes of it, which it holds.
         #[allow(unsafe_code)]
-        let moved = unsafe { libc::CPU_COUNT(&others) > 0 && libc::sched_setaffinity(0, size, &others) == 0 };
+        let moved = unsafe { libc::CPU_COUNT(&allowed) > 0 && libc::sched_setaffinity(0, size, &allowed) == 0 };
         moved.then_some(Allowed(before))
     }
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
     {
-        let _ = core;
+        let _ = (core, keep);
         None
     }
 }
 
-/// The cores a thread was allowed before [`off_core`]: allowed again when this drops.
+/// The cores a thread was allowed before [`restrict`]: allowed again when this drops.
 struct Allowed(#[cfg(all(target_os = "linux", target_env = "gnu"))] libc::cpu_set_t);
 
 impl Drop for Allowed {
     fn drop(&mut self) {
         #[cfg(all(target_os = "linux", target_env = "gnu"))]
-        // SAFETY: as in `off_core`: the set holds `size_of::<cpu_set_t>()` bytes, which `sched_setaffinity` reads.
+        // SAFETY: as in `restrict`: the set holds `size_of::<cpu_set_t>()` bytes, which `sched_setaffinity` reads.
         #[allow(unsafe_code)]
         unsafe {
             libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &self.0);
