@@ -21,7 +21,17 @@ pub fn thread_id() -> Option<String> {
 
 /// Minor page faults of this process so far (Linux: field 10 of /proc/self/stat; 0 elsewhere).
 pub fn minor_faults() -> u64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    faults_in("/proc/self/stat")
+}
+
+/// Minor page faults of the calling thread so far (Linux: field 10 of /proc/thread-self/stat; 0 elsewhere).
+pub fn thread_minor_faults() -> u64 {
+    faults_in("/proc/thread-self/stat")
+}
+
+/// The minor page faults a `stat` file of /proc lists (0 where it cannot be read).
+fn faults_in(path: &str) -> u64 {
+    let stat = std::fs::read_to_string(path).unwrap_or_default();
     // The fields after the command name, which is in parentheses and may hold spaces: minflt is the eighth.
     let fields = stat.rfind(')').map_or("", |end| &stat[end + 1..]);
     fields.split_whitespace().nth(7).and_then(|f| f.parse().ok()).unwrap_or(0)
