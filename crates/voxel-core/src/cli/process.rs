@@ -94,7 +94,7 @@ const WARM_STEP: usize = 64 << 10;
 /// each thread a heap of its own, fresh in a new thread, and keeps freed memory ([`keep_freed_memory`]): the worker's
 /// share of the first voxelization's lists then lands on pages already touched, where each first touch cost a page
 /// fault while the main thread waited (CesiumMan at R=128: 74–81 faults, 6–9 after; the first voxelization's time over
-/// the process's next ones, median of 15 processes, 0.34 → 0.21 ms). A worker spins through the read anyway: the
+/// the process's next ones, median of 21 processes, 0.345 → 0.236 ms). A worker spins through the read anyway: the
 /// writes take its idle core while the main thread reads.
 fn warm_heap(done: &AtomicBool) {
     let mut block: Vec<u8> = Vec::with_capacity(WARMED);
@@ -126,7 +126,7 @@ fn current_core() -> Option<usize> {
 /// scheduler moves one of them (often not within a small model's voxelization: half of the fresh runs of the Fox at
 /// R=128 as slow as one thread), where a worker kept on the other core spins there from the start.
 fn off_core(core: usize) -> Option<Allowed> {
-    restrict(core, false)
+    restrict(core, Cores::AllBut)
 }
 
 /// Keeps the calling thread on `core` until the returned guard drops, when it may run anywhere it could before
@@ -134,12 +134,21 @@ fn off_core(core: usize) -> Option<Allowed> {
 /// moved onto the core where the other worker spins, which it then shared while its own stood idle (fresh runs of
 /// CesiumMan at R=128 as slow as one thread or slower, 6–8 ms, in 3–5 of 41).
 fn on_core(core: usize) -> Option<Allowed> {
-    restrict(core, true)
+    restrict(core, Cores::Only)
 }
 
-/// Restricts the calling thread, until the returned guard drops, to `core` alone (`keep`) or to the cores it may run on
-/// but `core` (Linux with glibc; `None` where that leaves no core, `core` is not allowed, or the system refuses).
-fn restrict(core: usize, keep: bool) -> Option<Allowed> {
+/// Which cores [`restrict`] leaves a thread, of those it may run on.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Cores {
+    /// The one core.
+    Only,
+    /// All but the one core.
+    AllBut,
+}
+
+/// Restricts the calling thread, until the returned guard drops, to `cores` of those it may run on, by `core` (Linux
+/// with glibc; `None` where that leaves no core, `core` is not allowed, or the system refuses).
+fn restrict(core: usize, cores: Cores) -> Option<Allowed> {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         let size = std::mem::size_of::<libc::cpu_set_t>();
@@ -152,7 +161,7 @@ fn restrict(core: usize, keep: bool) -> Option<Allowed> {
                 return None;
             }
             let mut allowed = before;
-            if keep {
+            if cores == Cores::Only {
                 allowed = std::mem::zeroed();
                 libc::CPU_SET(core, &mut allowed);
             } else {
@@ -167,7 +176,7 @@ fn restrict(core: usize, keep: bool) -> Option<Allowed> {
     }
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
     {
-        let _ = (core, keep);
+        let _ = (core, cores);
         None
     }
 }
