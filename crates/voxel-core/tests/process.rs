@@ -6,18 +6,6 @@
 #[path = "support/cpu.rs"]
 mod cpu;
 
-/// Allocates `bytes`, writes every page and frees them; returns the page faults that took.
-fn touch(bytes: usize) -> u64 {
-    let before = cpu::minor_faults();
-    let mut block = vec![0u8; bytes];
-    for page in block.chunks_mut(4096) {
-        page[0] = 1;
-    }
-    std::hint::black_box(&block);
-    drop(block);
-    cpu::minor_faults() - before
-}
-
 #[test]
 fn a_block_freed_before_is_reused_without_page_faults() {
     voxel_core::cli::prepare_process();
@@ -25,8 +13,8 @@ fn a_block_freed_before_is_reused_without_page_faults() {
     let pages = (bytes / 4096) as u64;
     // The first touch faults on (nearly) every page; glibc's default would map the second block afresh and fault
     // on every page again (its threshold rises to 8 MiB, where a block of 8 MiB is still mapped).
-    let first = touch(bytes);
-    let second = touch(bytes);
+    let first = cpu::touch(bytes, cpu::minor_faults);
+    let second = cpu::touch(bytes, cpu::minor_faults);
     assert!(first > pages / 2, "the first touch of {pages} pages took {first} faults");
     assert!(second < pages / 16, "the second touch of {pages} pages took {second} faults (the first {first})");
 }

@@ -6,18 +6,6 @@
 #[path = "support/cpu.rs"]
 mod cpu;
 
-/// Allocates `bytes` on the calling thread, writes every page and frees them; returns the thread's page faults.
-fn touch(bytes: usize) -> u64 {
-    let before = cpu::thread_minor_faults();
-    let mut block = vec![0u8; bytes];
-    for page in block.chunks_mut(4096) {
-        page[0] = 1;
-    }
-    std::hint::black_box(&block);
-    drop(block);
-    cpu::thread_minor_faults() - before
-}
-
 #[test]
 fn the_other_worker_allocates_on_pages_it_touched_while_it_waited() {
     voxel_core::cli::prepare_process();
@@ -25,12 +13,14 @@ fn the_other_worker_allocates_on_pages_it_touched_while_it_waited() {
     let bytes = 2 << 20;
     let pages = (bytes / 4096) as u64;
     let (caller, others) = pool.install(|| {
-        let caller = touch(bytes);
+        let caller = cpu::touch(bytes, cpu::thread_minor_faults);
         let index = rayon::current_thread_index();
         let others = voxel_core::cli::with_workers_awake(|| {
             // The other worker readies its heap meanwhile (a few milliseconds).
             std::thread::sleep(std::time::Duration::from_millis(200));
-            rayon::broadcast(|context| (Some(context.index()) != index).then(|| touch(bytes)))
+            rayon::broadcast(|context| {
+                (Some(context.index()) != index).then(|| cpu::touch(bytes, cpu::thread_minor_faults))
+            })
         });
         (caller, others.into_iter().flatten().collect::<Vec<_>>())
     });

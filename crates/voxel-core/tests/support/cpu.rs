@@ -29,6 +29,19 @@ pub fn thread_minor_faults() -> u64 {
     faults_in("/proc/thread-self/stat")
 }
 
+/// Allocates `bytes` on the calling thread, writes every page and frees them; returns how much `faults` (a count of
+/// page faults: [`minor_faults`], [`thread_minor_faults`]) rose meanwhile.
+pub fn touch(bytes: usize, faults: fn() -> u64) -> u64 {
+    let before = faults();
+    let mut block = vec![0u8; bytes];
+    for page in block.chunks_mut(4096) {
+        page[0] = 1;
+    }
+    std::hint::black_box(&block);
+    drop(block);
+    faults() - before
+}
+
 /// The minor page faults a `stat` file of /proc lists (0 where it cannot be read).
 fn faults_in(path: &str) -> u64 {
     let stat = std::fs::read_to_string(path).unwrap_or_default();
