@@ -1,9 +1,10 @@
 //! The visible cells of a solid: filled cells with an empty face neighbour, found 64 cells of a column at a
-//! time with word operations on the bit grid (the work is the grid's words, R³/64, plus the output).
+//! time with word operations on the bit grid (the work is the grid's words, R³/64, plus the output), or, where the
+//! caller lists the filled cells (a solid that is the shell alone), each listed cell's neighbours one by one.
 
 use rayon::prelude::*;
 
-use crate::grid::{BitGrid, GridSpec};
+use crate::grid::{AscendingCoords, BitGrid, GridSpec};
 
 /// Columns handed to one task.
 const COLUMNS_PER_TASK: usize = 256;
@@ -54,6 +55,31 @@ pub(crate) fn visible_cells(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
         });
     });
     visible
+}
+
+/// Listed cells handed to one task of [`visible_listed`].
+const LISTED_PER_TASK: usize = 4096;
+
+/// [`visible_cells`] of a solid whose filled cells the caller has listed (`cells`, ascending): each cell's six
+/// neighbours looked up one bit at a time. A solid that is a surface alone fills a few per cent of its grid, whose
+/// words the word scan reads all, twice (at R=128 with `--fill none`, one thread: the milk truck's 46,129 cells in a
+/// grid of 644 k, 88.4 → 86.5 M instructions a voxelization; CesiumMan's 14,698, 45.8 → 45.4 M).
+pub(crate) fn visible_listed(spec: &GridSpec, solid: &BitGrid, cells: &[u32]) -> Vec<u32> {
+    let [_, ny, nz] = spec.dims.map(|d| d as usize);
+    let strides = [ny * nz, nz, 1];
+    cells
+        .par_chunks(LISTED_PER_TASK)
+        .flat_map_iter(|chunk| {
+            let mut coords = AscendingCoords::new(spec);
+            chunk.iter().copied().filter(move |&i| {
+                let c = coords.of(i);
+                let i = i as usize;
+                (0..3).any(|a| {
+                    c[a] == 0 || c[a] + 1 == spec.dims[a] || !solid.get(i - strides[a]) || !solid.get(i + strides[a])
+                })
+            })
+        })
+        .collect()
 }
 
 /// Calls `words` with each non-empty word of visible cells of the column starting at cell `base` (`nz` cells; bit
@@ -123,6 +149,8 @@ mod tests {
             }
         }
         assert_eq!(visible_cells(&spec, &solid), visible_by_brute_force(&spec, &solid));
+        let listed: Vec<u32> = (0..spec.cell_count() as u32).filter(|&i| solid.get(i as usize)).collect();
+        assert_eq!(visible_listed(&spec, &solid, &listed), visible_by_brute_force(&spec, &solid));
         let full = {
             let mut b = BitGrid::new(spec.cell_count());
             b.set_range(0..spec.cell_count());

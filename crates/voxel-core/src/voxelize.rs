@@ -16,7 +16,7 @@ use crate::progress::{Progress, Settle, Stage};
 use crate::radix;
 use crate::shell::{Shell, shell};
 use crate::soup::TriangleSoup;
-use crate::visible::visible_cells;
+use crate::visible::{visible_cells, visible_listed};
 
 /// Voxelizes `soup` with `options`.
 pub fn voxelize(soup: &TriangleSoup, options: &VoxelizeOptions) -> Result<VoxelModel> {
@@ -114,7 +114,12 @@ fn voxelize_within_timed(
     let (spec, tris, fill, shell, fill_time, shell_time) = passes?;
     progress.enter(Stage::Coloring)?;
     let solid = combine(&spec, options, fill, &shell, &tris);
-    let visible = visible_cells(&spec, &solid);
+    // Without a fill the solid is the shell, whose cells are listed.
+    let visible = if options.fill == FillMode::None {
+        visible_listed(&spec, &solid, &shell.cells)
+    } else {
+        visible_cells(&spec, &solid)
+    };
     let coloring = Instant::now();
     let mut colors = surface_colors(soup, &spec, &tris, &shell, &visible, progress);
     let times = PassTimes { fill: fill_time, shell: shell_time, color: coloring.elapsed() };
