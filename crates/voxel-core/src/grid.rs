@@ -181,6 +181,13 @@ impl GridSpec {
         (x as usize * self.dims[1] as usize + y as usize) * self.dims[2] as usize + z as usize
     }
 
+    /// The steps of the linear index along x, y and z: [`index`](Self::index) is their sum weighted by the
+    /// coordinates.
+    #[inline]
+    pub fn strides(&self) -> [usize; 3] {
+        [self.dims[1] as usize * self.dims[2] as usize, self.dims[2] as usize, 1]
+    }
+
     /// The cell (x, y, z) of a linear index.
     #[inline]
     pub fn coords(&self, index: usize) -> [u32; 3] {
@@ -537,7 +544,7 @@ mod tests {
     }
 
     #[test]
-    fn coordinates_stepped_along_a_column_match_the_division() {
+    fn strides_and_coordinates_stepped_along_a_column_match_the_index() {
         let spec = GridSpec::fit(
             &TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [5.0, 3.0, 7.0]), [1.0; 4]),
             9.0,
@@ -547,6 +554,11 @@ mod tests {
         )
         .unwrap();
         assert_eq!(spec.dims, [5, 3, 7]);
+        assert_eq!(spec.strides(), [21, 7, 1]);
+        for i in 0..105 {
+            let c = spec.coords(i);
+            assert_eq!((0..3).map(|a| c[a] as usize * spec.strides()[a]).sum::<usize>(), i, "cell {c:?}");
+        }
         // Every cell, then every third cell, then cells straddling column ends and going back.
         for cells in
             [(0..105).collect::<Vec<u32>>(), (0..105).step_by(3).collect(), vec![5, 6, 7, 13, 14, 21, 104, 3, 0, 1]]

@@ -125,10 +125,10 @@ pub(super) fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &
         push(last, Reach::Few);
         return;
     }
-    let mut push = |c| push(c, Reach::Many);
+    let mut push = |index| out(index, Reach::Many);
     let d = dominant_axis(n);
     if inside && in_one_layer(first[d], last[d], hi[d], spec.dims[d]) {
-        overlaps_in_layer(&t, d, [first, last], &mut push);
+        overlaps_in_layer(&t, d, [first, last], spec.strides(), &mut push);
         return;
     }
     overlaps_across(spec, &t, n, [lo.to_array(), hi.to_array()], [first, last], &mut push);
@@ -157,8 +157,15 @@ fn in_one_layer(first: u32, last: u32, hi: f64, cells: u32) -> bool {
 /// triangle exactly when the triangle's projection on that plane meets the square (closed sets; the layer holds
 /// the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the
 /// test is the projection's three edge normals. Grid coordinates have few enough significant bits that these
-/// products and sums are exact, as in the whole test.
-fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], push: &mut impl FnMut([u32; 3])) {
+/// products and sums are exact, as in the whole test. Each cell goes to `push` as its linear index, stepped by the
+/// grid's `strides` ([`GridSpec::strides`]).
+fn overlaps_in_layer(
+    t: &GridTriangle,
+    d: usize,
+    [first, last]: [[u32; 3]; 2],
+    strides: [usize; 3],
+    push: &mut impl FnMut(u32),
+) {
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let p = [t[0], t[1], t[2]].map(|w| [w[u], w[v]]);
     // Per edge: its normal in the plane, the range of the corners projected on it, and half the extent of a
@@ -170,6 +177,7 @@ fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], p
         (m, p0.min(p1).min(p2), p0.max(p1).max(p2), 0.5 * (m[0].abs() + m[1].abs()))
     });
     for iu in first[u]..=last[u] {
+        let row = first[d] as usize * strides[d] + iu as usize * strides[u];
         for iv in first[v]..=last[v] {
             let c = [f64::from(iu) + 0.5, f64::from(iv) + 0.5];
             let meets = edges.iter().all(|&(m, lo, hi, reach)| {
@@ -177,9 +185,7 @@ fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], p
                 lo <= at + reach && hi >= at - reach
             });
             if meets {
-                let mut cell = [0; 3];
-                (cell[u], cell[v], cell[d]) = (iu, iv, first[d]);
-                push(cell);
+                push((row + iv as usize * strides[v]) as u32);
             }
         }
     }
@@ -187,7 +193,9 @@ fn overlaps_in_layer(t: &GridTriangle, d: usize, [first, last]: [[u32; 3]; 2], p
 
 /// [`overlaps`] of a triangle `t` with normal `n` whose extent `lo`, `hi` spans the cells `first` to `last`
 /// (across more than one cell boundary, or clamped onto the grid's edge): each candidate cell is tested, a
-/// column along the dominant axis at a time.
+/// column along the dominant axis at a time; each overlapped cell goes to `push` as its linear index, stepped from
+/// the column's (where placing each cell's coordinates by axis and indexing them took 1–1.2 % of a small model's
+/// voxelization: one thread, CesiumMan at R=128 45.37 → 44.86 M instructions, the milk truck 86.5 → 85.4 M).
 #[inline(never)]
 fn overlaps_across(
     spec: &GridSpec,
@@ -195,7 +203,7 @@ fn overlaps_across(
     n: DVec3,
     [lo, hi]: [[f64; 3]; 2],
     [first, last]: [[u32; 3]; 2],
-    push: &mut impl FnMut([u32; 3]),
+    push: &mut impl FnMut(u32),
 ) {
     let corners = t.map(|w| w.to_array());
     let cell_of = |a: usize, v: f64| cell_of(v, spec.dims[a]);
@@ -210,6 +218,7 @@ fn overlaps_across(
     let inside = (columns > FEW_COLUMNS).then(|| FootprintTest::new(&corners, n[d].signum(), u, v));
     let tester = CellTester::new(t, d, lo, hi);
     let t0 = corners[0];
+    let strides = spec.strides();
     for iu in first[u]..=last[u] {
         // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
         let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
@@ -238,11 +247,10 @@ fn overlaps_across(
                 continue;
             }
             let Some(column) = tester.column(&row, f64::from(iv) + 0.5, test == Test::Full) else { continue };
+            let base = iu as usize * strides[u] + iv as usize * strides[v];
             for id in ids {
                 if column.overlaps(f64::from(id) + 0.5) {
-                    let mut c = [0u32; 3];
-                    (c[u], c[v], c[d]) = (iu, iv, id);
-                    push(c);
+                    push((base + id as usize * strides[d]) as u32);
                 }
             }
         }
@@ -325,9 +333,7 @@ mod tests {
                 _ => continue,
             }
             let mut whole = Vec::new();
-            overlaps_across(&spec, &t, n, [lo, hi], [first, last], &mut |c| {
-                whole.push(spec.index(c[0], c[1], c[2]) as u32)
-            });
+            overlaps_across(&spec, &t, n, [lo, hi], [first, last], &mut |cell| whole.push(cell));
             whole.sort_unstable();
             fast.sort_unstable();
             assert_eq!(fast, whole, "{t:?}");
