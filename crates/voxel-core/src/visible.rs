@@ -65,8 +65,7 @@ const LISTED_PER_TASK: usize = 4096;
 /// words the word scan reads all, twice (at R=128 with `--fill none`, one thread: the milk truck's 46,129 cells in a
 /// grid of 644 k, 88.4 → 86.5 M instructions a voxelization; CesiumMan's 14,698, 45.8 → 45.4 M).
 pub(crate) fn visible_listed(spec: &GridSpec, solid: &BitGrid, cells: &[u32]) -> Vec<u32> {
-    let [_, ny, nz] = spec.dims.map(|d| d as usize);
-    let strides = [ny * nz, nz, 1];
+    let strides = spec.strides();
     cells
         .par_chunks(LISTED_PER_TASK)
         .flat_map_iter(|chunk| {

@@ -114,7 +114,7 @@ fn voxelize_within_timed(
     let (spec, tris, fill, shell, fill_time, shell_time) = passes?;
     progress.enter(Stage::Coloring)?;
     let solid = combine(&spec, options, fill, &shell, &tris);
-    // Without a fill the solid is the shell, whose cells are listed.
+    // Without a fill the solid is the shell's cells (`combine`), which the shell lists.
     let visible = if options.fill == FillMode::None {
         visible_listed(&spec, &solid, &shell.cells)
     } else {
