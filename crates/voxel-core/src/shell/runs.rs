@@ -14,11 +14,12 @@ const NO_CELL: u32 = u32::MAX;
 /// A free slot of [`TaskRuns`].
 const FREE: [u32; 3] = [NO_CELL, 0, 0];
 
-/// One task's overlaps of [`shell`](super::shell) as runs `[cell, first triangle, count]` of consecutive triangles overlapping
-/// one cell, in lists by the top bits of their cell (a slab of the grid each). Open are the current run (the
-/// last overlap's) and, in a slot picked by a hash of its cell, each of up to [`OPEN_RUNS`] others. A run leaves
-/// for its slab's list when the triangle after its last skips its cell or another run takes its slot, so a
-/// cell's runs reach its list in the order of their triangles, as the sort by cell must find them.
+/// One task's overlaps of [`shell`](super::shell) as runs `[cell, first triangle, count]` of consecutive triangles
+/// overlapping one cell, in lists by the top bits of their cell (a slab of the grid each). Open are the current run
+/// (the last overlap's) and, in a slot picked by a hash of its cell, each of up to [`OPEN_RUNS`] others. A run leaves
+/// for its slab's list when the triangle after its last skips its cell, another run takes its slot or a triangle of
+/// many cells comes ([`push_alone`](Self::push_alone)), so a cell's runs reach its list in the order of their
+/// triangles, as the sort by cell must find them.
 pub(super) struct TaskRuns {
     slabs: Vec<Segments<u64>>,
     shift: u32,
@@ -30,13 +31,15 @@ pub(super) struct TaskRuns {
     count: u32,
     /// The other open runs ([`FREE`]: a free slot).
     open: [[u32; 3]; OPEN_RUNS],
+    /// Whether a run was parked in `open` since the slots were last cleared.
+    parked: bool,
 }
 
 impl TaskRuns {
     /// No runs, for slabs of 2^`shift` cells, `slab_count` of them, packed by `code`.
     pub(super) fn new(slab_count: usize, shift: u32, code: RunCode) -> Self {
         let slabs = (0..slab_count).map(|_| Segments::default()).collect();
-        Self { slabs, shift, code, cell: NO_CELL, first: 0, count: 0, open: [FREE; OPEN_RUNS] }
+        Self { slabs, shift, code, cell: NO_CELL, first: 0, count: 0, open: [FREE; OPEN_RUNS], parked: false }
     }
 
     /// Adds the overlap of cell `cell` and triangle `tri` (each pair once, triangles ascending).
@@ -60,6 +63,7 @@ impl TaskRuns {
             if current[0] != NO_CELL {
                 let parked = std::mem::replace(&mut self.open[slot(current[0])], current);
                 self.close(parked);
+                self.parked = true;
             }
             let run = &mut self.open[slot(cell)];
             if run[0] == cell {
@@ -75,21 +79,30 @@ impl TaskRuns {
     }
 
     /// Adds the overlap of cell `cell` and triangle `tri` as a run of its own, for a triangle of many cells (whose
-    /// cells the next triangle seldom all shares: parking a run at each would cost more than it saves). The
-    /// cell's open run, if any, is closed first, so that it stays ahead of this one in the cell's list.
+    /// cells the next triangle seldom all shares: parking a run at each would cost more than it saves). Every open
+    /// run is closed first ([`close_open`](Self::close_open)): a run grows only by the triangle right after its last,
+    /// so none grows past this one, and each stays ahead of this triangle's runs in its cell's list. Once they are
+    /// closed, the triangle's cells go straight to their lists, unchecked (`valgrind --tool=callgrind`, one thread,
+    /// a voxelization at R=128 less the load: the milk truck 85.4 → 82.0 M instructions, the box of vertex colours
+    /// 121.4 → 117.2 M, CesiumMan 44.9 → 43.9 M).
     #[inline]
     pub(super) fn push_alone(&mut self, cell: u32, tri: u32) {
-        if cell == self.cell {
-            self.close([self.cell, self.first, self.count]);
-            (self.cell, self.count) = (NO_CELL, 0);
-        } else {
-            let open = &mut self.open[slot(cell)];
-            if open[0] == cell {
-                let run = std::mem::replace(open, FREE);
-                self.close(run);
-            }
+        if self.cell != NO_CELL || self.parked {
+            self.close_open();
         }
-        self.close([cell, tri, 1]);
+        self.slabs[(cell >> self.shift) as usize].push(self.code.pack([cell, tri, 1]));
+    }
+
+    /// Closes the current run and every parked one.
+    #[cold]
+    fn close_open(&mut self) {
+        self.close([self.cell, self.first, self.count]);
+        (self.cell, self.count) = (NO_CELL, 0);
+        for k in 0..OPEN_RUNS {
+            let run = std::mem::replace(&mut self.open[k], FREE);
+            self.close(run);
+        }
+        self.parked = false;
     }
 
     /// Puts `run` (unless it is [`FREE`]) in its slab's list.
@@ -102,10 +115,7 @@ impl TaskRuns {
 
     /// The lists, with every open run closed.
     pub(super) fn finish(mut self) -> Vec<Segments<u64>> {
-        self.close([self.cell, self.first, self.count]);
-        for run in self.open {
-            self.close(run);
-        }
+        self.close_open();
         self.slabs
     }
 }
