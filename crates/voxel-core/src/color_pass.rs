@@ -119,7 +119,9 @@ enum Source {
 
 /// Where grid point `p` takes its colour among `candidates` (none: `None`): the nearest ([`nearest_among`]), or,
 /// when every candidate is flat with one colour and part, that colour (none is measured: a model of plain
-/// materials skips its distances).
+/// materials skips its distances). A lone candidate is the nearest: only its closest point is found, not its
+/// distance (one thread at R=128: the textured box's voxelization 115.5 → 104.0 M instructions, the milk truck's
+/// 82.0 → 78.8 M, CesiumMan's 43.9 → 43.3 M).
 fn color_source(
     soup: &TriangleSoup,
     tris: &GridTriangles,
@@ -133,6 +135,9 @@ fn color_source(
         && rest.clone().all(|t| flat_color(soup, t) == Some(flat))
     {
         return Some(Source::Flat(first, flat));
+    }
+    if rest.next().is_none() {
+        return Some(Source::Nearest(first, closest_point_barycentric(p, &tris.get(first))));
     }
     let (t, w) = nearest_among(tris, p, candidates, boxes)?;
     Some(Source::Nearest(t, w))
@@ -643,6 +648,9 @@ mod tests {
         }
         let distinct: std::collections::HashSet<_> = colors.iter().map(|&(color, _)| color).collect();
         assert!(colors.len() > 5000 && distinct.len() > 1000, "{} cells of {} colours", colors.len(), distinct.len());
+        // Cells of one triangle take its closest point without its distance: the same texel.
+        let lone = (0..colors.len()).filter(|&k| shell.triangles_at(k).count() == 1).count();
+        assert!(lone > 500 && lone < colors.len() - 500, "{lone} cells of one triangle of {}", colors.len());
     }
 
     #[test]

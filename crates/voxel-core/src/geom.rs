@@ -166,7 +166,9 @@ impl BoxTester {
 }
 
 /// The closest point of triangle `t` to `p`, as barycentric weights of its corners (Ericson, RTCD 5.1.5).
-#[inline]
+/// (Inlined at each call: the colour pass calls it from two places in its inner loop, where a call of its own cost
+/// CesiumMan's voxelization at R=128 2 % more instructions.)
+#[inline(always)]
 pub fn closest_point_barycentric(p: DVec3, t: &GridTriangle) -> [f64; 3] {
     let [a, b, c] = *t;
     let (ab, ac, ap) = (b - a, c - a, p - a);
