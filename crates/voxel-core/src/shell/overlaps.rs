@@ -158,7 +158,7 @@ fn in_one_layer(first: u32, last: u32, hi: f64, cells: u32) -> bool {
 /// the triangle's whole extent along `d`). Every square of the extent meets the projection's bounding box, so the
 /// test is the projection's three edge normals. Grid coordinates have few enough significant bits that these
 /// products and sums are exact, as in the whole test. Each cell goes to `push` as its linear index, stepped by the
-/// grid's `strides` ([`GridSpec::strides`]).
+/// grid's `strides` ([`GridSpec::strides`]); a long row's cells form one run, whose ends are bisected ([`row_span`]).
 fn overlaps_in_layer(
     t: &GridTriangle,
     d: usize,
@@ -176,12 +176,22 @@ fn overlaps_in_layer(
         let [p0, p1, p2] = p.map(|q| m[0] * q[0] + m[1] * q[1]);
         (m, p0.min(p1).min(p2), p0.max(p1).max(p2), 0.5 * (m[0].abs() + m[1].abs()))
     });
+    let long = last[v] - first[v] >= SPAN_SEARCH_FROM;
     for iu in first[u]..=last[u] {
         let row = first[d] as usize * strides[d] + iu as usize * strides[u];
+        let cu = f64::from(iu) + 0.5;
+        // The projection of the centre of the square (iu, iv) on an edge's normal.
+        let at = |m: [f64; 2], iv: u32| m[0] * cu + m[1] * (f64::from(iv) + 0.5);
+        if long {
+            let Some(span) = row_span(first[v]..=last[v], &edges, at) else { continue };
+            for iv in span {
+                push((row + iv as usize * strides[v]) as u32);
+            }
+            continue;
+        }
         for iv in first[v]..=last[v] {
-            let c = [f64::from(iu) + 0.5, f64::from(iv) + 0.5];
             let meets = edges.iter().all(|&(m, lo, hi, reach)| {
-                let at = m[0] * c[0] + m[1] * c[1];
+                let at = at(m, iv);
                 lo <= at + reach && hi >= at - reach
             });
             if meets {
@@ -189,6 +199,60 @@ fn overlaps_in_layer(
             }
         }
     }
+}
+
+/// From this many cells a row on (less one), [`overlaps_in_layer`] finds the ends of each row's run of overlapped
+/// cells by bisection ([`row_span`]) rather than testing every cell (one thread, a voxelization at R=128: the
+/// textured box 104.0 → 99.2 M instructions, the box of vertex colours 105.8 → 101.3 M, the milk truck 78.8 → 77.8 M;
+/// with 4 or 16 rather than 8, each within 0.5 % of that).
+const SPAN_SEARCH_FROM: u32 = 8;
+
+/// The squares of a row (`row`: their positions along it, at least one) that meet a triangle's projection, given per
+/// edge its normal, the range of the corners projected on it and a square's reach on it (as [`overlaps_in_layer`]
+/// builds them), and the projection `at` of a square's centre on a normal. Each edge's two tests are monotonic along
+/// the row: `at` is a sum of a constant and a product by the square's coordinate, each rounded, and rounding keeps
+/// order, so each test holds on a prefix or a suffix of the row (or all of it, or none), and all six on one run of
+/// squares, whose ends bisection finds with the very tests a square at a time would make.
+fn row_span(
+    row: std::ops::RangeInclusive<u32>,
+    edges: &[([f64; 2], f64, f64, f64); 3],
+    at: impl Fn([f64; 2], u32) -> f64,
+) -> Option<std::ops::RangeInclusive<u32>> {
+    let (mut start, mut end) = row.into_inner();
+    for &(m, lo, hi, reach) in edges {
+        let above_lo = |iv| lo <= at(m, iv) + reach;
+        let below_hi = |iv| hi >= at(m, iv) - reach;
+        // Where the projection grows along the row, the first test holds on a suffix and the second on a prefix;
+        // where it shrinks, the other way round; across the row (m[1] = 0) both are constant.
+        if m[1] > 0.0 {
+            start = first_holding(start, end, above_lo)?;
+            end = last_holding(start, end, below_hi)?;
+        } else {
+            start = first_holding(start, end, below_hi)?;
+            end = last_holding(start, end, above_lo)?;
+        }
+    }
+    Some(start..=end)
+}
+
+/// The first of `from..=to` where `holds`, which holds on a suffix of it (`None`: nowhere).
+fn first_holding(from: u32, to: u32, holds: impl Fn(u32) -> bool) -> Option<u32> {
+    let (mut lo, mut hi) = (from, to + 1);
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if holds(mid) { hi = mid } else { lo = mid + 1 }
+    }
+    (lo <= to).then_some(lo)
+}
+
+/// The last of `from..=to` where `holds`, which holds on a prefix of it (`None`: nowhere).
+fn last_holding(from: u32, to: u32, holds: impl Fn(u32) -> bool) -> Option<u32> {
+    let (mut lo, mut hi) = (from, to + 1);
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        if holds(mid) { lo = mid + 1 } else { hi = mid }
+    }
+    (lo > from).then(|| lo - 1)
 }
 
 /// [`overlaps`] of a triangle `t` with normal `n` whose extent `lo`, `hi` spans the cells `first` to `last`
@@ -340,6 +404,52 @@ mod tests {
         }
         assert!(across_one > 5_000 && in_layer > 5_000, "{across_one} across one boundary, {in_layer} in a layer");
         assert!(in_top_layer > 500, "{in_top_layer} on the grid's upper face");
+    }
+
+    #[test]
+    fn long_rows_of_a_triangle_in_one_layer_get_the_cells_the_whole_test_gives() {
+        // Flat triangles across a 64³ grid, each in one layer along its dominant axis (corners on a 1/8 lattice,
+        // so that edges pass through cell corners and along cell faces), their rows long enough to be bisected.
+        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(64), 1.0, 1 << 20).unwrap();
+        assert_eq!(spec.dims, [64, 64, 64]);
+        let mut random = crate::lcg::Lcg::new(17);
+        let mut next = |n: u64| random.below(n);
+        let (mut bisected, mut cells) = (0, 0);
+        for _ in 0..3_000 {
+            let d = next(3) as usize;
+            let layer = next(64 * 8 - 8) as f64 / 8.0;
+            let depth = [0.0, 0.125, 0.5][next(3) as usize];
+            let t: GridTriangle = std::array::from_fn(|_| {
+                let mut p = DVec3::ZERO;
+                p[(d + 1) % 3] = next(64 * 8 + 1) as f64 / 8.0;
+                p[(d + 2) % 3] = next(64 * 8 + 1) as f64 / 8.0;
+                p[d] = (layer.floor() + (layer.fract() + depth * next(2) as f64).min(0.875)).min(64.0);
+                p
+            });
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            if n.length_squared() == 0.0 || dominant_axis(n) != d {
+                continue;
+            }
+            let (lo, hi) = (t[0].min(t[1]).min(t[2]).to_array(), t[0].max(t[1]).max(t[2]).to_array());
+            let first = [0, 1, 2].map(|a| cell_of(lo[a], 64));
+            let last = [0, 1, 2].map(|a| last_cell_of(lo[a], hi[a], 64));
+            if !in_one_layer(first[d], last[d], hi[d], 64) {
+                continue;
+            }
+            let v = (d + 2) % 3;
+            bisected += usize::from(last[v] - first[v] >= SPAN_SEARCH_FROM);
+            let tris = GridTriangles::from_triangles(&[t]);
+            let mut fast = Vec::new();
+            overlaps(&spec, &tris, 0, &mut |cell, _| fast.push(cell));
+            let mut whole = Vec::new();
+            overlaps_across(&spec, &t, n, [lo, hi], [first, last], &mut |cell| whole.push(cell));
+            fast.sort_unstable();
+            whole.sort_unstable();
+            assert_eq!(fast, whole, "{t:?}");
+            cells += fast.len();
+        }
+        assert!(bisected > 1_000 && cells > 500_000, "{bisected} triangles of long rows, {cells} cells");
     }
 
     #[test]
