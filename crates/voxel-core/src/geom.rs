@@ -223,9 +223,9 @@ pub fn point_at(t: &GridTriangle, w: [f64; 3]) -> DVec3 {
 /// The squared distance from `p` to the bounding box of triangle `t`: no point of `t` is nearer.
 #[inline]
 pub(crate) fn box_distance2(t: &GridTriangle, p: DVec3) -> f64 {
-    let lo = t[0].min(t[1]).min(t[2]);
-    let hi = t[0].max(t[1]).max(t[2]);
-    (lo - p).max(p - hi).max(DVec3::ZERO).length_squared()
+    let (lo, hi) = crate::float::bounds(*t);
+    let gap = |a: usize| crate::float::max(crate::float::max(lo[a] - p[a], p[a] - hi[a]), 0.0);
+    DVec3::new(gap(0), gap(1), gap(2)).length_squared()
 }
 
 /// Whether a triangle whose [`box_distance2`] from a point is `bound` lies farther from it than the squared

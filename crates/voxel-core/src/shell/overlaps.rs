@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::cells::CellTester;
+use crate::float;
 use crate::geom::GridTriangle;
 use crate::grid::{GridSpec, GridTriangles};
 
@@ -84,7 +85,7 @@ fn cell_of(v: f64, cells: u32) -> u32 {
 /// equal its floor.
 #[inline]
 fn last_cell_of(from: f64, to: f64, cells: u32) -> u32 {
-    let floor = to.max(0.0).min(f64::from(cells)) as u32;
+    let floor = float::min(float::max(to, 0.0), f64::from(cells)) as u32;
     let boundary = to > from && floor > 0 && f64::from(floor) == to;
     (floor - u32::from(boundary)).min(cells - 1)
 }
@@ -105,7 +106,7 @@ pub(super) fn overlaps(spec: &GridSpec, tris: &GridTriangles, tri: usize, out: &
     if n.length_squared() <= 0.0 || n.is_nan() {
         return; // zero-area triangles add no surface
     }
-    let (lo, hi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+    let (lo, hi) = float::bounds(t);
     let [nx, ny, nz] = spec.dims;
     // The cells of the triangle's extent.
     let first = [cell_of(lo.x, nx), cell_of(lo.y, ny), cell_of(lo.z, nz)];
@@ -174,7 +175,7 @@ fn overlaps_in_layer(
         let (a, b) = (p[k], p[(k + 1) % 3]);
         let m = [a[1] - b[1], b[0] - a[0]];
         let [p0, p1, p2] = p.map(|q| m[0] * q[0] + m[1] * q[1]);
-        (m, p0.min(p1).min(p2), p0.max(p1).max(p2), 0.5 * (m[0].abs() + m[1].abs()))
+        (m, float::min(float::min(p0, p1), p2), float::max(float::max(p0, p1), p2), 0.5 * (m[0].abs() + m[1].abs()))
     });
     let long = last[v] - first[v] >= SPAN_SEARCH_FROM;
     for iu in first[u]..=last[u] {
@@ -285,7 +286,7 @@ fn overlaps_across(
     let strides = spec.strides();
     for iu in first[u]..=last[u] {
         // The footprint's extent along u and v (clipped to the triangle's), and the plane's terms there.
-        let us = [f64::from(iu).max(lo[u]), f64::from(iu + 1).min(hi[u])];
+        let us = [float::max(f64::from(iu), lo[u]), float::min(f64::from(iu + 1), hi[u])];
         let u_terms = us.map(|cu| n[u] * (cu - t0[u]));
         let Some(row) = tester.row(f64::from(iu) + 0.5) else { continue };
         for iv in first[v]..=last[v] {
@@ -294,18 +295,18 @@ fn overlaps_across(
                 continue;
             }
             // Extent of the plane along the dominant axis over this cell's footprint.
-            let vs = [f64::from(iv).max(lo[v]), f64::from(iv + 1).min(hi[v])];
+            let vs = [float::max(f64::from(iv), lo[v]), float::min(f64::from(iv + 1), hi[v])];
             let mut dlo = f64::INFINITY;
             let mut dhi = f64::NEG_INFINITY;
             for u_term in u_terms {
                 for cv in vs {
                     // n · (p − t0) = 0 solved for the dominant coordinate.
                     let pd = t0[d] - (u_term + n[v] * (cv - t0[v])) / n[d];
-                    dlo = dlo.min(pd);
-                    dhi = dhi.max(pd);
+                    dlo = float::min(pd, dlo);
+                    dhi = float::max(pd, dhi);
                 }
             }
-            let (dlo, dhi) = (dlo.max(lo[d]), dhi.min(hi[d]));
+            let (dlo, dhi) = (float::max(dlo, lo[d]), float::min(dhi, hi[d]));
             let ids = cell_of(d, dlo)..=last_cell_of(d, dlo, dhi);
             if ids.is_empty() {
                 continue;
