@@ -226,7 +226,11 @@ fn stats(ui: &mut egui::Ui, library: &ModelLibrary, models: &Assets<VoxelModelAs
         }
         ui.label(format!(
             "grid {}×{}×{}, {} triangles, {} colours",
-            s.grid[0], s.grid[1], s.grid[2], s.triangles, s.colors
+            s.grid[0],
+            s.grid[1],
+            s.grid[2],
+            s.triangles,
+            model.color_count()
         ));
         ui.label(format!("voxelized in {:.1} ms, {}", entry.voxelize_ms, megabytes(model.memory_bytes())));
     }

@@ -73,7 +73,10 @@ fn pose(rig: &mut Rig, request: PoseRequest, options: &VoxelizeOptions) -> voxel
         None => *rig.bounds[request.clip].insert(rig.model.clip_bounds(request.clip)?),
     };
     rig.model.pose_into(request.clip, request.time, &mut rig.soup)?;
-    voxel_core::voxelize_within(&rig.soup, options, bounds)
+    let model = voxel_core::voxelize_within(&rig.soup, options, bounds)?;
+    // The panel shows the pose's colour count: counted here, off the frame.
+    model.color_count();
+    Ok(model)
 }
 
 /// Applies the panel's and keys' requests, and the command line's start to a model shown the first time.

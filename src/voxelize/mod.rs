@@ -82,6 +82,8 @@ impl JobInput {
             }
         };
         let model = voxel_core::voxelize_watched(&imported.soup, options, progress).map_err(|e| e.to_string())?;
+        // The panel shows the colour count: counted here, off the frame.
+        model.color_count();
         if tile_from_voxels {
             imported.tile = Some(surface_mesh(&model));
         }

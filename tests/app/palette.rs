@@ -110,7 +110,7 @@ fn the_colour_limit_keeps_at_most_n_colours_and_dithering_stays_in_the_palette()
         assert!(!shown.is_empty() && shown.len() <= n, "{n}: {shown:?}");
         let library = app.world().resource::<ModelLibrary>();
         let (_, model) = library.current_ready(app.world().resource::<Assets<VoxelModelAsset>>()).unwrap();
-        assert_eq!(model.stats.colors, shown.len(), "the panel's count");
+        assert_eq!(model.color_count(), shown.len(), "the panel's count");
     }
     let gameboy = Palette::from_arg("gameboy").unwrap();
     set_colors(&mut app, |c| {

@@ -51,6 +51,7 @@ pub mod cli;
 pub mod color;
 mod color_pass;
 mod columns;
+mod distinct;
 pub mod error;
 pub mod export;
 pub mod files;

@@ -3,7 +3,9 @@
 //! solid model costs R³/8 bytes plus its surface, and a hollow one only its surface.
 
 use std::borrow::Cow;
+use std::sync::OnceLock;
 
+use crate::distinct;
 use crate::grid::{AscendingCoords, BitGrid, GridSpec};
 
 /// One filled cell, as the model's iterators hand it out.
@@ -32,8 +34,6 @@ pub struct VoxelStats {
     pub surface: usize,
     /// Filled cells with an empty face neighbour.
     pub visible: usize,
-    /// Distinct colours among the output voxels.
-    pub colors: usize,
 }
 
 /// A voxelized model: the grid placement, which cells are filled, and the colours of the visible ones.
@@ -56,6 +56,8 @@ pub struct VoxelModel {
     visible: Vec<u32>,
     /// The colour and part of each visible cell.
     colors: Vec<([u8; 4], u32)>,
+    /// The distinct colours, once counted ([`VoxelModel::color_count`]).
+    color_count: OnceLock<usize>,
 }
 
 impl VoxelModel {
@@ -70,7 +72,20 @@ impl VoxelModel {
         colors: Vec<([u8; 4], u32)>,
     ) -> Self {
         debug_assert_eq!(visible.len(), colors.len());
-        Self { spec, stats, parts, solid, visible, colors }
+        Self { spec, stats, parts, solid, visible, colors, color_count: OnceLock::new() }
+    }
+
+    /// The number of distinct colours among the output voxels (interior voxels copy visible ones, so the visible
+    /// cells hold every colour; after a palette, the distinct RGB colours it left). Counted at the first call, not
+    /// by the voxelization: a caller that shows no count (an animation's frames, the app's voxels) does not pay for
+    /// it (CesiumMan at R=128: 1,488 colours among 14,600 cells, 0.10–0.19 ms of a fresh process's 3.1–3.5 ms).
+    pub fn color_count(&self) -> usize {
+        *self.color_count.get_or_init(|| distinct::count(&self.colors))
+    }
+
+    /// Sets the count [`color_count`](Self::color_count) gives, for a recolouring that counts its own.
+    pub(crate) fn set_color_count(&mut self, count: usize) {
+        self.color_count = OnceLock::from(count);
     }
 
     /// Whether only the visible cells are output.
@@ -144,6 +159,7 @@ impl VoxelModel {
         for (&i, (color, part)) in self.visible.iter().zip(&mut self.colors) {
             *color = f(&Voxel { cell: coords.of(i).map(|c| c as u16), color: *color, part: *part, visible: true });
         }
+        self.color_count = OnceLock::new();
     }
 
     /// Model-space centre of a voxel.
@@ -260,6 +276,16 @@ mod tests {
         assert_eq!(m.stats.visible, 50, "3 × 3 × 6 less its 1 × 1 × 4 core");
         assert_eq!(m.hollowed().memory_bytes(), 50 * 12 + parts);
         assert_eq!(m.memory_bytes(), 8 + 50 * 12 + parts, "54 cells fit one 64-bit word");
+    }
+
+    #[test]
+    fn the_colour_count_is_of_the_colours_shown_after_a_recolouring_too() {
+        let mut m = block();
+        assert_eq!(m.color_count(), 6, "a colour a layer");
+        m.recolor(|v| [v.cell[2] as u8 % 2, 0, 0, 255]);
+        assert_eq!(m.color_count(), 2, "counted again");
+        m.set_color_count(9);
+        assert_eq!(m.color_count(), 9);
     }
 
     #[test]

@@ -202,7 +202,7 @@ pub(crate) fn process(
             voxels: s.voxels,
             surface: s.surface,
             visible: s.visible,
-            colors: s.colors,
+            colors: model.color_count(),
             output_voxels: model.len(),
             load_ms,
             voxelize_ms,
@@ -220,7 +220,7 @@ pub(crate) fn process(
             s.surface,
             s.visible,
             model.len(),
-            s.colors
+            model.color_count()
         ))
     }
 }

@@ -86,7 +86,7 @@ impl ColorStage {
     }
 
     /// Recolours `model`'s voxels (sampled colours, e.g. voxelized without `pastel`) and recounts
-    /// `stats.colors` as the distinct RGB colours shown. The alpha of each voxel is kept.
+    /// [`VoxelModel::color_count`] as the distinct RGB colours shown. The alpha of each voxel is kept.
     pub fn apply(&self, model: &mut VoxelModel) -> Result<()> {
         self.apply_keeping(model, &mut None)
     }
@@ -126,7 +126,7 @@ impl ColorStage {
             });
         }
         // The colours the exports show: RGB (a voxel keeps its alpha, which no export writes).
-        model.stats.colors = histogram(model).len();
+        model.set_color_count(histogram(model).len());
         Ok(())
     }
 
@@ -220,7 +220,7 @@ mod tests {
         let shown = colors_of(&model);
         assert!(shown.is_subset(&gameboy), "{shown:?}");
         assert_eq!(shown.len(), 4, "a ramp from black to white uses all four");
-        assert_eq!(model.stats.colors, 4);
+        assert_eq!(model.color_count(), 4);
     }
 
     #[test]
