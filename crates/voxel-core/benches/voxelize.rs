@@ -28,7 +28,8 @@
 //!
 //! `cargo bench -p voxel-core --bench voxelize -- hashes` prints, per model, a hash of every output voxel
 //! (cell, colour, part, visibility) at the default grid and R = 64, 128, 256, solid and hollow, plus the
-//! default grid with the pastel remap: two builds that print the same lines give the same cells and colours.
+//! default grid with the pastel remap and the shell alone (`--fill none`) at R = 128 and 256: two builds that print
+//! the same lines give the same cells and colours.
 
 use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
@@ -108,15 +109,17 @@ fn print_fill_cost(name: &str, soup: &TriangleSoup, runs: usize) {
     }
 }
 
-/// Prints the output hashes of one model: solid and hollow at the default grid and R = 64, 128, 256, and
-/// pastel at the default grid.
+/// Prints the output hashes of one model: solid and hollow at the default grid and R = 64, 128, 256, pastel at the
+/// default grid, and the shell alone (`--fill none`, the equal work of `benches/open3d_compare.py`) at R = 128 and 256.
 fn print_hashes(name: &str, soup: &TriangleSoup) {
     let grids = [GridSize::default(), GridSize::Resolution(64), GridSize::Resolution(128), GridSize::Resolution(256)];
-    let runs = grids.iter().flat_map(|&grid| [false, true].map(|hollow| (grid, hollow, false)));
+    let runs = grids.iter().flat_map(|&grid| [false, true].map(|hollow| (grid, hollow, false, FillMode::Winding)));
+    let shells = [128, 256].map(|r| (GridSize::Resolution(r), false, false, FillMode::None));
     let line: Vec<String> = runs
-        .chain([(GridSize::default(), false, true)])
-        .map(|(grid, hollow, pastel)| {
-            let options = VoxelizeOptions { grid, hollow, pastel, ..Default::default() };
+        .chain([(GridSize::default(), false, true, FillMode::Winding)])
+        .chain(shells)
+        .map(|(grid, hollow, pastel, fill)| {
+            let options = VoxelizeOptions { grid, hollow, pastel, fill, ..Default::default() };
             let mut hasher = std::hash::DefaultHasher::new();
             voxelize(soup, &options).expect("voxelize").voxels().for_each(|v| v.hash(&mut hasher));
             format!("{:016x}", hasher.finish())
