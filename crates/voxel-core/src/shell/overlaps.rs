@@ -202,10 +202,10 @@ fn overlaps_in_layer(
     }
 }
 
-/// From this many cells a row on (less one), [`overlaps_in_layer`] finds the ends of each row's run of overlapped
-/// cells by bisection ([`row_span`]) rather than testing every cell (one thread, a voxelization at R=128: the
-/// textured box 104.0 → 99.2 M instructions, the box of vertex colours 105.8 → 101.3 M, the milk truck 78.8 → 77.8 M;
-/// with 4 or 16 rather than 8, each within 0.5 % of that).
+/// In a row whose last cell lies this many cells or more past its first, [`overlaps_in_layer`] finds the ends of the
+/// run of overlapped cells by bisection ([`row_span`]) rather than testing every cell (one thread, a voxelization at
+/// R=128: the textured box 104.0 → 99.2 M instructions, the box of vertex colours 105.8 → 101.3 M, the milk truck
+/// 78.8 → 77.8 M; with 4 or 16 rather than 8, each within 0.5 % of that).
 const SPAN_SEARCH_FROM: u32 = 8;
 
 /// The squares of a row (`row`: their positions along it, at least one) that meet a triangle's projection, given per
@@ -329,6 +329,14 @@ mod tests {
     use crate::grid::GridSize;
     use crate::soup::TriangleSoup;
 
+    /// A grid of `r`³ unit cells.
+    fn cube_grid(r: u32) -> GridSpec {
+        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
+        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(r), 1.0, 1 << 20).unwrap();
+        assert_eq!(spec.dims, [r; 3]);
+        spec
+    }
+
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
         let mut random = crate::lcg::Lcg::new(7);
@@ -365,9 +373,7 @@ mod tests {
     fn a_triangle_across_one_boundary_or_in_one_layer_gets_the_cells_the_whole_test_gives() {
         // Triangles of up to five cells at coordinates snapped to 1/8 of a cell (so that many corners and edges
         // lie on cell boundaries, the ties), in an 8³ grid.
-        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
-        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(8), 1.0, 1 << 20).unwrap();
-        assert_eq!(spec.dims, [8, 8, 8]);
+        let spec = cube_grid(8);
         let mut random = crate::lcg::Lcg::new(3);
         let mut next = |n: u64| random.below(n);
         let (mut across_one, mut in_layer, mut in_top_layer) = (0, 0, 0);
@@ -411,9 +417,7 @@ mod tests {
     fn long_rows_of_a_triangle_in_one_layer_get_the_cells_the_whole_test_gives() {
         // Flat triangles across a 64³ grid, each in one layer along its dominant axis (corners on a 1/8 lattice,
         // so that edges pass through cell corners and along cell faces), their rows long enough to be bisected.
-        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
-        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(64), 1.0, 1 << 20).unwrap();
-        assert_eq!(spec.dims, [64, 64, 64]);
+        let spec = cube_grid(64);
         let mut random = crate::lcg::Lcg::new(17);
         let mut next = |n: u64| random.below(n);
         let (mut bisected, mut cells) = (0, 0);
