@@ -42,7 +42,7 @@ pub struct VoxelStats {
 /// ([`VoxelModel::is_hollow`]); [`VoxelModel::voxels`] yields them ascending by (x, y, z). An interior
 /// cell takes the colour and part of the nearer end of its filled run along z (both ends of a run are
 /// visible cells), computed as it is yielded.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct VoxelModel {
     /// Where the grid sits in normalized model space.
     pub spec: GridSpec,
@@ -58,6 +58,16 @@ pub struct VoxelModel {
     colors: Vec<([u8; 4], u32)>,
     /// The distinct colours, once counted ([`VoxelModel::color_count`]).
     color_count: OnceLock<usize>,
+}
+
+/// Models are equal when their placement, counts, parts, cells and colours are: whether the colour count was asked
+/// for yet does not matter.
+impl PartialEq for VoxelModel {
+    fn eq(&self, other: &Self) -> bool {
+        let Self { spec, stats, parts, solid, visible, colors, color_count: _ } = self;
+        (spec, stats, parts, solid, visible, colors)
+            == (&other.spec, &other.stats, &other.parts, &other.solid, &other.visible, &other.colors)
+    }
 }
 
 impl VoxelModel {
@@ -286,6 +296,8 @@ mod tests {
         assert_eq!(m.color_count(), 2, "counted again");
         m.set_color_count(9);
         assert_eq!(m.color_count(), 9);
+        let fresh = VoxelModel { color_count: OnceLock::new(), ..m.clone() };
+        assert_eq!(fresh, m, "the same model, its count asked for or not");
     }
 
     #[test]
