@@ -169,36 +169,66 @@ fn overlaps_in_layer(
 ) {
     let (u, v) = ((d + 1) % 3, (d + 2) % 3);
     let p = [t[0], t[1], t[2]].map(|w| [w[u], w[v]]);
-    // Per edge: its normal in the plane, the range of the corners projected on it, and half the extent of a
-    // unit square's projection.
-    let edges = [0, 1, 2].map(|k| {
-        let (a, b) = (p[k], p[(k + 1) % 3]);
-        let m = [a[1] - b[1], b[0] - a[0]];
-        let [p0, p1, p2] = p.map(|q| m[0] * q[0] + m[1] * q[1]);
-        (m, float::min(float::min(p0, p1), p2), float::max(float::max(p0, p1), p2), 0.5 * (m[0].abs() + m[1].abs()))
-    });
+    let edges = [0, 1, 2].map(|k| EdgeBand::new(p[k], p[(k + 1) % 3], &p));
     let long = last[v] - first[v] >= SPAN_SEARCH_FROM;
     for iu in first[u]..=last[u] {
         let row = first[d] as usize * strides[d] + iu as usize * strides[u];
         let cu = f64::from(iu) + 0.5;
-        // The projection of the centre of the square (iu, iv) on an edge's normal.
-        let at = |m: [f64; 2], iv: u32| m[0] * cu + m[1] * (f64::from(iv) + 0.5);
         if long {
-            let Some(span) = row_span(first[v]..=last[v], &edges, at) else { continue };
+            let Some(span) = row_span(first[v]..=last[v], &edges, cu) else { continue };
             for iv in span {
                 push((row + iv as usize * strides[v]) as u32);
             }
             continue;
         }
         for iv in first[v]..=last[v] {
-            let meets = edges.iter().all(|&(m, lo, hi, reach)| {
-                let at = at(m, iv);
-                lo <= at + reach && hi >= at - reach
-            });
-            if meets {
+            if edges.iter().all(|e| e.meets(e.at(cu, iv))) {
                 push((row + iv as usize * strides[v]) as u32);
             }
         }
+    }
+}
+
+/// One edge of a triangle's projection on the plane across its dominant axis, for [`overlaps_in_layer`]: the edge's
+/// normal in the plane, the range of the corners projected on it, and half the extent of a unit square's projection.
+struct EdgeBand {
+    normal: [f64; 2],
+    lo: f64,
+    hi: f64,
+    reach: f64,
+}
+
+impl EdgeBand {
+    /// The edge from `a` to `b` of the projected triangle `corners`.
+    fn new(a: [f64; 2], b: [f64; 2], corners: &[[f64; 2]; 3]) -> Self {
+        let normal = [a[1] - b[1], b[0] - a[0]];
+        let [p0, p1, p2] = corners.map(|q| normal[0] * q[0] + normal[1] * q[1]);
+        let (lo, hi) = (float::min(float::min(p0, p1), p2), float::max(float::max(p0, p1), p2));
+        Self { normal, lo, hi, reach: 0.5 * (normal[0].abs() + normal[1].abs()) }
+    }
+
+    /// The projection on the normal of the centre (`cu`, `iv` + ½) of a square of the row at `cu`.
+    #[inline]
+    fn at(&self, cu: f64, iv: u32) -> f64 {
+        self.normal[0] * cu + self.normal[1] * (f64::from(iv) + 0.5)
+    }
+
+    /// Whether the square whose centre projects to `at` reaches the corners' range from below.
+    #[inline]
+    fn above_lo(&self, at: f64) -> bool {
+        self.lo <= at + self.reach
+    }
+
+    /// Whether the square whose centre projects to `at` reaches the corners' range from above.
+    #[inline]
+    fn below_hi(&self, at: f64) -> bool {
+        self.hi >= at - self.reach
+    }
+
+    /// Whether the square whose centre projects to `at` meets the corners' range.
+    #[inline]
+    fn meets(&self, at: f64) -> bool {
+        self.above_lo(at) && self.below_hi(at)
     }
 }
 
@@ -208,24 +238,24 @@ fn overlaps_in_layer(
 /// 78.8 → 77.8 M; with 4 or 16 rather than 8, each within 0.5 % of that).
 const SPAN_SEARCH_FROM: u32 = 8;
 
-/// The squares of a row (`row`: their positions along it, at least one) that meet a triangle's projection, given per
-/// edge its normal, the range of the corners projected on it and a square's reach on it (as [`overlaps_in_layer`]
-/// builds them), and the projection `at` of a square's centre on a normal. Each edge's two tests are monotonic along
-/// the row: `at` is a sum of a constant and a product by the square's coordinate, each rounded, and rounding keeps
-/// order, so each test holds on a prefix or a suffix of the row (or all of it, or none), and all six on one run of
-/// squares, whose ends bisection finds with the very tests a square at a time would make.
+/// The squares of a row (`row`: their positions along it, at least one; its centres at `cu` across it) that meet a
+/// triangle's projection, given by its `edges`. Each edge's two tests are monotonic along the row: the projection of a
+/// centre is a sum of a constant and a product by the square's coordinate, each rounded, and rounding keeps order, so
+/// each test holds on a prefix or a suffix of the row (or all of it, or none), and all six on one run of squares,
+/// whose ends bisection finds with the very tests a square at a time would make.
 fn row_span(
     row: std::ops::RangeInclusive<u32>,
-    edges: &[([f64; 2], f64, f64, f64); 3],
-    at: impl Fn([f64; 2], u32) -> f64,
+    edges: &[EdgeBand; 3],
+    cu: f64,
 ) -> Option<std::ops::RangeInclusive<u32>> {
     let (mut start, mut end) = row.into_inner();
-    for &(m, lo, hi, reach) in edges {
-        let above_lo = |iv| lo <= at(m, iv) + reach;
-        let below_hi = |iv| hi >= at(m, iv) - reach;
+    for e in edges {
+        let above_lo = |iv| e.above_lo(e.at(cu, iv));
+        let below_hi = |iv| e.below_hi(e.at(cu, iv));
         // Where the projection grows along the row, the first test holds on a suffix and the second on a prefix;
-        // where it shrinks, the other way round; across the row (m[1] = 0) both are constant.
-        if m[1] > 0.0 {
+        // where it shrinks, the other way round; across the row (a normal with no component along it) both are
+        // constant.
+        if e.normal[1] > 0.0 {
             start = first_holding(start, end, above_lo)?;
             end = last_holding(start, end, below_hi)?;
         } else {
