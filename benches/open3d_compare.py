@@ -11,18 +11,19 @@ Both sides run in a fresh process per run and time the same steps with their own
   colour) of the process, with the voxel size that gives R cells along the longest axis, as our `--resolution R`
   does. Open3D's second call in the same process is shown too (warm).
 Neither side's interpreter or library start is timed (Python + `import open3d` takes ~1 s). Best of N runs
-each, interleaved so that load on a shared machine hits both alike. Prints a Markdown table with voxel-art's
+each (11 by default: on a shared 2-core VM a small model's best of 5 moved by a tenth or more from one run of the
+script to the next, its best of 11 by a few per cent), interleaved so that load on a shared machine hits both alike. Prints a Markdown table with voxel-art's
 read speed (file bytes / `load_ms`) and the ratios Open3D ms / voxel-art ms for both modes; the last line is
 the geometric mean of each ratio column.
 
     pip install open3d==0.20.0   # Debian also needs libusb-1.0-0 and libgomp1
     cargo build --release -p voxel-core --features cli --example voxelize
-    python3 benches/open3d_compare.py [--models DIR] [-r 64 -r 128] [--runs 5] [--cli PATH] [NAME_FILTER ...]
+    python3 benches/open3d_compare.py [--models DIR] [-r 64 -r 128] [--runs 11] [--cli PATH] [NAME_FILTER ...]
 
 The big generated scenes (1M and 4M triangles of spheres, a 2M-triangle height field) are a folder of .glb:
 
     cargo bench -p voxel-core --bench big -- write /tmp/voxel-art-big
-    python3 benches/open3d_compare.py --models /tmp/voxel-art-big -r 128 -r 256 --runs 3
+    python3 benches/open3d_compare.py --models /tmp/voxel-art-big -r 128 -r 256
 
 Open3D reads glTF through Assimp, which has no EXT_meshopt_compression: such files are listed as skipped.
 """
@@ -112,7 +113,7 @@ def main():
     parser.add_argument("--models", type=Path, default=Path(default_models()))
     parser.add_argument("--cli", default=default_cli(), help="the voxel-art voxelize command (a binary path)")
     parser.add_argument("-r", "--resolution", type=int, action="append", help="R (repeatable; default 128)")
-    parser.add_argument("--runs", type=int, default=5, help="best of this many runs of each")
+    parser.add_argument("--runs", type=int, default=11, help="best of this many runs of each")
     parser.add_argument("filters", nargs="*", help="only models whose path contains one of these")
     args = parser.parse_args()
     import open3d as o3d
