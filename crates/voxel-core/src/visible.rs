@@ -152,19 +152,26 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn word_parallel_visibility_matches_the_neighbour_check() {
-        // Columns of 70 cells (two words each, not word-aligned) with a pseudo-random solid.
-        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [5.0, 3.0, 70.0]), [1.0; 4]);
+    /// A grid of `dims` cells (70 along z, the longest) with a pseudo-random solid from `seed`: a cell is empty where
+    /// the top `64 − shift` bits of its draw are zero (one cell in 2^(64 − shift)).
+    fn random_solid(dims: [u32; 3], seed: u64, shift: u32) -> (GridSpec, BitGrid) {
+        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], dims.map(|d| d as f32)), [1.0; 4]);
         let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(70), 1.0, 1 << 26).unwrap();
-        assert_eq!(spec.dims, [5, 3, 70]);
+        assert_eq!(spec.dims, dims);
         let mut solid = BitGrid::new(spec.cell_count());
-        let mut random = crate::lcg::Lcg::new(12345);
+        let mut random = crate::lcg::Lcg::new(seed);
         for i in 0..spec.cell_count() {
-            if random.next_u64() >> 60 != 0 {
+            if random.next_u64() >> shift != 0 {
                 solid.set(i);
             }
         }
+        (spec, solid)
+    }
+
+    #[test]
+    fn word_parallel_visibility_matches_the_neighbour_check() {
+        // Columns of 70 cells (two words each, not word-aligned), one cell in 16 empty.
+        let (spec, solid) = random_solid([5, 3, 70], 12345, 60);
         assert_eq!(visible_cells(&spec, &solid), visible_by_brute_force(&spec, &solid));
         let full = {
             let mut b = BitGrid::new(spec.cell_count());
@@ -178,18 +185,9 @@ mod tests {
 
     #[test]
     fn listed_cells_give_the_neighbour_checks_visible_cells_across_tasks() {
-        // A pseudo-random solid in a 24 × 20 × 70 grid: about 31,500 listed cells, eight tasks, each of which keeps
-        // some of its cells and drops others (the stretches close up).
-        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], [24.0, 20.0, 70.0]), [1.0; 4]);
-        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(70), 1.0, 1 << 26).unwrap();
-        assert_eq!(spec.dims, [24, 20, 70]);
-        let mut solid = BitGrid::new(spec.cell_count());
-        let mut random = crate::lcg::Lcg::new(777);
-        for i in 0..spec.cell_count() {
-            if random.next_u64() >> 61 != 0 {
-                solid.set(i);
-            }
-        }
+        // A pseudo-random solid in a 24 × 20 × 70 grid, one cell in 8 empty: about 29,400 listed cells, eight tasks,
+        // each of which keeps some of its cells and drops others (the stretches close up).
+        let (spec, solid) = random_solid([24, 20, 70], 777, 61);
         let listed: Vec<u32> = (0..spec.cell_count() as u32).filter(|&i| solid.get(i as usize)).collect();
         assert!(listed.len() > 7 * LISTED_PER_TASK, "{} listed", listed.len());
         let expected = visible_by_brute_force(&spec, &solid);
