@@ -65,8 +65,8 @@ const LISTED_PER_TASK: usize = 4096;
 /// words the word scan reads all, twice (at R=128 with `--fill none`, one thread: the milk truck's 46,129 cells in a
 /// grid of 644 k, 88.4 → 86.5 M instructions a voxelization; CesiumMan's 14,698, 45.8 → 45.4 M). Each task writes
 /// its visible cells to the front of its own stretch of the output, as long as its stretch of `cells`, and the
-/// stretches then close up: the output is written once, into one allocation, where lists collected per task and
-/// joined wrote each cell twice, into fresh pages on both threads.
+/// stretches then close up in place: one allocation, its pages touched by the tasks, where lists collected per task
+/// and then joined wrote each cell into two, fresh pages on both threads.
 pub(crate) fn visible_listed(spec: &GridSpec, solid: &BitGrid, cells: &[u32]) -> Vec<u32> {
     let strides = spec.strides();
     let mut visible = vec![0u32; cells.len()];
