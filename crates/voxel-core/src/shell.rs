@@ -116,6 +116,12 @@ const SLAB_CELL_BITS: u32 = 16;
 /// sort: [`sorted_by_cell`]).
 const RUNS_PER_SORT: usize = 1 << 16;
 
+/// Up to this many runs in all, [`sorted_by_cell`] sets aside every sort's first-pass room before the sorts start, on the
+/// calling thread. Room for all the sorts at once holds 8 bytes a run more at the shell's peak than room taken by each
+/// sort as it starts, two at a time on two threads (the FlightHelmet's peak RSS at R=2048 1.43 GB with room for all,
+/// 1.27 GB without; at R=1024 325 and 296 MB). Below, at most 8 MB of room.
+const ROOM_AHEAD_RUNS: usize = 1 << 20;
+
 /// Stretches of triangles a thread in [`shell`]: equal counts of triangles, several a thread, so that a thread whose
 /// stretches hold the larger triangles leaves some to the other. (Split as rayon splits work, the milk truck's first
 /// half of its triangles, the body's larger ones, went to one thread in two stretches of 0.54 and 0.71 ms while the
@@ -223,8 +229,10 @@ fn sorted_by_cell(slabs: Vec<Vec<Vec<u64>>>, shift: u32) -> (Vec<u32>, Vec<u32>,
         let (base, span) = ((first as u64) << shift, ((end - first) as u64) << shift);
         let lists = [&mut cells_left, &mut offsets_left, &mut runs_left].map(|rest| take_front(rest, n));
         // The sort's first pass goes to room from this thread's heap, which holds the pages a read freed, where the
-        // other worker's own heap is fresh: a page fault a page (CesiumMan at R=128: 25,541 runs, 50 pages).
-        sorts.push((group, base, span, start, lists, Vec::with_capacity(n)));
+        // other worker's own heap is fresh: a page fault a page (CesiumMan at R=128: 25,541 runs, 50 pages). A long
+        // shell's sorts each take their room when they start ([`ROOM_AHEAD_RUNS`]).
+        let room = if len <= ROOM_AHEAD_RUNS { Vec::with_capacity(n) } else { Vec::new() };
+        sorts.push((group, base, span, start, lists, room));
         start += n;
     }
     let groups: Vec<(usize, usize)> = sorts
