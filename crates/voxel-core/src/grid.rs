@@ -107,6 +107,17 @@ impl GridSpec {
         Self::fit_bounds(bounds, model_size, size, height_ratio, max_cells)
     }
 
+    /// A grid of `dims` cells, fitted around a box of those proportions (for tests of the passes on a grid of a
+    /// given shape).
+    #[cfg(test)]
+    pub(crate) fn of_cells(dims: [u32; 3]) -> Self {
+        let cuboid = crate::shapes::cuboid([0.0; 3], dims.map(|d| d as f32));
+        let size = GridSize::Resolution(dims.into_iter().max().unwrap_or(1));
+        let spec = Self::fit(&TriangleSoup::from_mesh(&cuboid, [1.0; 4]), 9.0, size, 1.0, 1 << 26).unwrap();
+        assert_eq!(spec.dims, dims);
+        spec
+    }
+
     /// Fits a grid around the box `bounds` (min, max) as [`GridSpec::fit`] does around a soup's bounds: for
     /// a fixed grid over every pose of an animation.
     pub fn fit_bounds(
@@ -545,15 +556,7 @@ mod tests {
 
     #[test]
     fn strides_and_coordinates_stepped_along_a_column_match_the_index() {
-        let spec = GridSpec::fit(
-            &TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [5.0, 3.0, 7.0]), [1.0; 4]),
-            9.0,
-            GridSize::Resolution(7),
-            1.0,
-            1 << 26,
-        )
-        .unwrap();
-        assert_eq!(spec.dims, [5, 3, 7]);
+        let spec = GridSpec::of_cells([5, 3, 7]);
         assert_eq!(spec.strides(), [21, 7, 1]);
         for i in 0..105 {
             let c = spec.coords(i);

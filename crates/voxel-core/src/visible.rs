@@ -137,7 +137,6 @@ fn column_visible(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{GridSize, TriangleSoup, shapes::cuboid};
 
     /// The visible cells by checking every cell's six neighbours one by one.
     fn visible_by_brute_force(spec: &GridSpec, solid: &BitGrid) -> Vec<u32> {
@@ -152,12 +151,10 @@ mod tests {
             .collect()
     }
 
-    /// A grid of `dims` cells (70 along z, the longest) with a pseudo-random solid from `seed`: a cell is empty where
-    /// the top `64 − shift` bits of its draw are zero (one cell in 2^(64 − shift)).
+    /// A grid of `dims` cells with a pseudo-random solid from `seed`: a cell is empty where the top `64 − shift` bits
+    /// of its draw are zero (one cell in 2^(64 − shift)).
     fn random_solid(dims: [u32; 3], seed: u64, shift: u32) -> (GridSpec, BitGrid) {
-        let soup = TriangleSoup::from_mesh(&cuboid([0.0; 3], dims.map(|d| d as f32)), [1.0; 4]);
-        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(70), 1.0, 1 << 26).unwrap();
-        assert_eq!(spec.dims, dims);
+        let spec = GridSpec::of_cells(dims);
         let mut solid = BitGrid::new(spec.cell_count());
         let mut random = crate::lcg::Lcg::new(seed);
         for i in 0..spec.cell_count() {

@@ -356,16 +356,6 @@ fn overlaps_across(
 mod tests {
     use super::*;
     use crate::geom::BoxTester;
-    use crate::grid::GridSize;
-    use crate::soup::TriangleSoup;
-
-    /// A grid of `r`³ unit cells.
-    fn cube_grid(r: u32) -> GridSpec {
-        let soup = TriangleSoup::from_mesh(&crate::shapes::cuboid([0.0; 3], [1.0; 3]), [1.0; 4]);
-        let spec = GridSpec::fit(&soup, 9.0, GridSize::Resolution(r), 1.0, 1 << 20).unwrap();
-        assert_eq!(spec.dims, [r; 3]);
-        spec
-    }
 
     #[test]
     fn squares_inside_the_projection_need_only_the_plane_test_and_squares_outside_none() {
@@ -403,7 +393,7 @@ mod tests {
     fn a_triangle_across_one_boundary_or_in_one_layer_gets_the_cells_the_whole_test_gives() {
         // Triangles of up to five cells at coordinates snapped to 1/8 of a cell (so that many corners and edges
         // lie on cell boundaries, the ties), in an 8³ grid.
-        let spec = cube_grid(8);
+        let spec = GridSpec::of_cells([8; 3]);
         let mut random = crate::lcg::Lcg::new(3);
         let mut next = |n: u64| random.below(n);
         let (mut across_one, mut in_layer, mut in_top_layer) = (0, 0, 0);
@@ -447,7 +437,7 @@ mod tests {
     fn long_rows_of_a_triangle_in_one_layer_get_the_cells_the_whole_test_gives() {
         // Flat triangles across a 64³ grid, each in one layer along its dominant axis (corners on a 1/8 lattice,
         // so that edges pass through cell corners and along cell faces), their rows long enough to be bisected.
-        let spec = cube_grid(64);
+        let spec = GridSpec::of_cells([64; 3]);
         let mut random = crate::lcg::Lcg::new(17);
         let mut next = |n: u64| random.below(n);
         let (mut bisected, mut cells) = (0, 0);
