@@ -93,11 +93,12 @@ fn voxelize_within_timed(
             let ((shell, shell_time), (fill, fill_time)) = rayon::join(
                 || timed(|| shell(&spec, &tris, progress)),
                 || {
+                    // Flood and none find the solid from the shell alone (`combine`).
                     timed(|| match options.fill {
                         FillMode::Winding | FillMode::Parity => {
-                            solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh, progress)
+                            Some(solid_fill(soup, &spec, &tris, options.fill, options.method, &bvh, progress))
                         }
-                        FillMode::Flood | FillMode::None => BitGrid::new(spec.cell_count()),
+                        FillMode::Flood | FillMode::None => None,
                     })
                 },
             );
@@ -167,8 +168,15 @@ fn prepare<'a>(
     Ok((spec, tris))
 }
 
-/// The solid cells from the fill and the shell of `tris`, per the modes.
-fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Shell, tris: &GridTriangles) -> BitGrid {
+/// The solid cells from the fill (`None` for the modes that have no fill pass: flood and none) and the shell of
+/// `tris`, per the modes.
+fn combine(
+    spec: &GridSpec,
+    options: &VoxelizeOptions,
+    fill: Option<BitGrid>,
+    shell: &Shell,
+    tris: &GridTriangles,
+) -> BitGrid {
     let shell_bits = || {
         let mut bits = BitGrid::new(spec.cell_count());
         for &c in &shell.cells {
@@ -176,9 +184,8 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
         }
         bits
     };
-    match options.fill {
-        FillMode::Winding | FillMode::Parity => {
-            let mut solid = fill;
+    match fill {
+        Some(mut solid) => {
             match options.shell {
                 ShellMode::All => {
                     for &c in &shell.cells {
@@ -194,7 +201,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             }
             solid
         }
-        FillMode::Flood => {
+        None if options.fill == FillMode::Flood => {
             let shell_bits = shell_bits();
             let outside = reachable_from_outside(spec, &shell_bits);
             let mut solid = BitGrid::new(spec.cell_count());
@@ -205,7 +212,7 @@ fn combine(spec: &GridSpec, options: &VoxelizeOptions, fill: BitGrid, shell: &Sh
             }
             solid
         }
-        FillMode::None => shell_bits(),
+        None => shell_bits(),
     }
 }
 
